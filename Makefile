@@ -1,0 +1,37 @@
+# armtrack: `make demo` and `make test` set everything up on a fresh machine.
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed-stamp
+DEMO := sample_sessions/circle-01
+DEMO_OUT := demo-out
+
+.PHONY: setup demo test lint bench validate docs samples clean
+
+$(STAMP): pyproject.toml
+	$(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+demo: $(STAMP)
+	$(BIN)/armtrack info $(DEMO)
+	$(BIN)/armtrack info $(DEMO) --json --out $(DEMO_OUT) > /dev/null
+	@echo "demo: summary written to $(DEMO_OUT)/info.json"
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q -p no:cacheprovider
+
+lint: $(STAMP)
+	$(BIN)/ruff check armtrack_cli tests
+
+bench: $(STAMP)
+	$(BIN)/python -m pytest -q -p no:cacheprovider benchmarks --benchmark-only
+
+docs: $(STAMP)
+	$(BIN)/python -c "from armtrack_cli.cli import render_reference as r; open('docs/cli.md','w').write(r())"
+
+clean:
+	rm -rf $(VENV) $(DEMO_OUT) *.egg-info

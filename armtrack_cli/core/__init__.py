@@ -1,0 +1,1 @@
+"""Core types, geometry and errors: numpy/scipy only, no files, no click."""

@@ -1,0 +1,51 @@
+"""One root exception, a subclass per concern.
+
+Every error names the file (or the session.toml key) it is about, says what was seen and,
+where we can, how to fix it. The CLI prints ``error: FILE: message`` and exits 1.
+"""
+
+from __future__ import annotations
+
+
+class ArmtrackError(Exception):
+    """Root of every error armtrack reports to a user (exit code 1)."""
+
+    def __init__(self, path: object, problem: str, hint: str | None = None):
+        self.path = str(path)
+        self.problem = problem
+        self.hint = hint
+        super().__init__(self.message)
+
+    @property
+    def message(self) -> str:
+        text = self.problem
+        if self.hint:
+            text = f"{text}; {self.hint}"
+        return text
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.message}"
+
+
+class ConfigError(ArmtrackError):
+    """session.toml or a recipe is wrong: a key, a type or an impossible value."""
+
+
+class DataError(ArmtrackError):
+    """A data file (IMU, video, ground truth, depth) cannot be read as what it claims to be."""
+
+
+class ImuFileError(DataError):
+    """An IMU export (Xsens, DOT, CSV, MCAP) is malformed."""
+
+
+class VideoError(DataError):
+    """A video, its timestamps or its camera model is unreadable."""
+
+
+class GroundTruthError(DataError):
+    """A Qualisys export is malformed or does not hold the markers asked for."""
+
+
+class OutputError(ArmtrackError):
+    """An output could not be written."""

@@ -1,0 +1,75 @@
+"""Camera models in OpenCV FileStorage YAML: intrinsics.yaml (read) and camera.yaml (write).
+
+Keys as the contract names them: camera_matrix, distortion_coefficients, image_width,
+image_height, and in camera.yaml also R_WC (3x3), T_WC (3x1, m), reprojection_error_px.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from armtrack_cli.core.errors import VideoError
+from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.session.outputs import atomic_write
+
+
+def read_camera_yaml(path: str | Path) -> CameraModel:
+    path = Path(path)
+    if not path.is_file():
+        raise VideoError(path, "not found", "check [camera] intrinsics in session.toml")
+    head = path.read_bytes()[:64]
+    if not head.strip():
+        raise VideoError(path, "is empty, expected OpenCV FileStorage YAML with camera_matrix")
+    if b"\x00" in head:
+        raise VideoError(path, "is a binary file, expected OpenCV FileStorage YAML")
+    try:
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ | cv2.FILE_STORAGE_FORMAT_YAML)
+    except (cv2.error, SystemError):  # OpenCV's parser raises either on bad YAML
+        raise VideoError(path, "is not OpenCV FileStorage YAML",
+                         "it should start with %YAML:1.0 and hold camera_matrix") from None
+    try:
+        K = fs.getNode("camera_matrix").mat()
+        dist = fs.getNode("distortion_coefficients").mat()
+        w = fs.getNode("image_width").real()
+        h = fs.getNode("image_height").real()
+        R = fs.getNode("R_WC").mat()
+        T = fs.getNode("T_WC").mat()
+        err = fs.getNode("reprojection_error_px")
+        err = None if err.empty() else float(err.real())
+    finally:
+        fs.release()
+    if K is None or K.shape != (3, 3):
+        raise VideoError(path, "has no 3x3 camera_matrix")
+    if not (K[0, 0] > 0 and K[1, 1] > 0 and K[2, 2] == 1 and abs(K[1, 0]) + abs(K[2, 0]) + abs(
+            K[2, 1]) == 0):
+        raise VideoError(path, f"camera_matrix {K.tolist()} is not a pinhole matrix",
+                         "expected [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] with fx, fy > 0")
+    dist = np.zeros(5) if dist is None else dist.reshape(-1).astype(float)
+    if dist.size not in (4, 5, 8, 12, 14):
+        raise VideoError(path, f"distortion_coefficients has {dist.size} values",
+                         "OpenCV takes 4, 5, 8, 12 or 14")
+    if not (w > 0 and h > 0):
+        raise VideoError(path, "image_width and image_height are missing or not positive")
+    return CameraModel(K.astype(float), dist, int(w), int(h),
+                       None if R is None else R.astype(float),
+                       None if T is None else T.reshape(3).astype(float), err)
+
+
+def write_camera_yaml(path: str | Path, cam: CameraModel) -> Path:
+    def write(tmp: Path) -> None:
+        fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_FORMAT_YAML)
+        fs.write("camera_matrix", np.asarray(cam.K, dtype=float))
+        fs.write("distortion_coefficients", np.asarray(cam.dist, dtype=float).reshape(1, -1))
+        fs.write("image_width", int(cam.width))
+        fs.write("image_height", int(cam.height))
+        if cam.R_WC is not None:
+            fs.write("R_WC", np.asarray(cam.R_WC, dtype=float))
+            fs.write("T_WC", np.asarray(cam.T_WC, dtype=float).reshape(3, 1))
+        if cam.reprojection_error_px is not None:
+            fs.write("reprojection_error_px", float(cam.reprojection_error_px))
+        fs.release()
+
+    return atomic_write(path, write)

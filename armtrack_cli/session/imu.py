@@ -1,0 +1,81 @@
+"""Read any IMU file the contract names: the format is told by content, not by extension.
+
+After reading, units are sanity-checked (deg/s where rad/s is expected, g where m/s² is) and
+a recording without orientation gets one estimated offline (see ``orientation``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core.errors import ImuFileError
+from armtrack_cli.core.streams import ImuSamples
+from armtrack_cli.session import imu_csv, imu_mcap, xsens
+from armtrack_cli.session.orientation import estimate_orientation
+from armtrack_cli.session.text_table import read_text_lines
+
+MAX_GYRO_RAD_S = 35.0  # 2000 °/s, the largest range of MEMS gyros
+FORMATS = "Xsens MT Manager export, Xsens DOT CSV, generic CSV (t,ax,ay,az,gx,gy,gz) or MCAP"
+
+
+def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | None = None,
+             estimate: bool = True) -> ImuSamples:
+    """Load an IMU recording into contract conventions (B frame, SI, quaternions B -> W)."""
+    path = Path(path)
+    if not path.exists():
+        raise ImuFileError(path, "not found", "check [imu] file in session.toml")
+    if path.is_dir():
+        raise ImuFileError(path, "is a folder, not an IMU file")
+    with open(path, "rb") as f:
+        head = f.read(8)
+    if head == imu_mcap.MAGIC:
+        samples = imu_mcap.read_mcap_imu(path, topic=topic)
+    else:
+        if head.startswith(b"\x89MCAP"):
+            raise ImuFileError(path, "is a damaged MCAP file (bad magic)")
+        lines = read_text_lines(path, ImuFileError, f"an IMU file ({FORMATS})")
+        if xsens.looks_like_dot(lines):
+            samples = xsens.read_dot(path, rate_hz=rate_hz, lines=lines)
+        elif xsens.looks_like_mt_manager(lines):
+            samples = xsens.read_mt_manager(path, rate_hz=rate_hz, lines=lines)
+        elif imu_csv.looks_like_generic_csv(lines):
+            samples = imu_csv.read_generic_csv(path, lines=lines)
+        else:
+            first = next((ln for ln in lines if ln.strip()), "")[:60]
+            raise ImuFileError(path, f"is not an IMU format armtrack reads (starts {first!r})",
+                               f"expected {FORMATS}")
+    check_units(samples)
+    if samples.n < 2:
+        raise ImuFileError(path, f"holds {samples.n} sample: too short to use")
+    if samples.quat is None and estimate:
+        if np.isnan(samples.gyr).all():
+            raise ImuFileError(path, "has no orientation and no gyroscope to estimate it from")
+        q = estimate_orientation(samples.gyr, samples.acc, samples.mag, samples.rate_hz)
+        source = "estimated (VQF, gyro+acc+mag)" if samples.mag is not None else \
+            "estimated (VQF, gyro+acc)"
+        samples = dataclasses.replace(samples, quat=q, orientation_source=source)
+    return samples
+
+
+def check_units(s: ImuSamples) -> None:
+    """Refuse values no wrist IMU in SI units produces, saying which unit they look like."""
+    path = Path(s.path)
+    g = np.abs(s.gyr[np.isfinite(s.gyr)])
+    if g.size and g.max() > MAX_GYRO_RAD_S:
+        raise ImuFileError(path, f"gyroscope reaches {g.max():.0f}, more than the 35 rad/s "
+                           "(2000 °/s) any MEMS gyro measures",
+                           "the values look like degrees per second; armtrack expects rad/s")
+    rows = np.isfinite(s.acc).all(axis=1)
+    if rows.sum() >= 10:
+        mag = np.linalg.norm(s.acc[rows], axis=1)
+        med = float(np.median(mag))
+        if med < 3.0:
+            raise ImuFileError(path, f"accelerometer magnitude is {med:.2f} on median; a worn "
+                               "sensor reads about 9.81 m/s²",
+                               "the values look like g; armtrack expects m/s²")
+        if med > 40.0:
+            raise ImuFileError(path, f"accelerometer magnitude is {med:.0f} on median; a worn "
+                               "sensor reads about 9.81 m/s²", "are the values in m/s²?")

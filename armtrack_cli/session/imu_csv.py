@@ -1,0 +1,84 @@
+"""The contract's generic IMU CSV: ``t,ax,ay,az,gx,gy,gz`` [+ ``mx,my,mz``] [+ ``qw,qx,qy,qz``].
+
+t in s, specific force in m/s², rate in rad/s, field in µT, quaternion (w, x, y, z) B -> W.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.core.errors import ImuFileError
+from armtrack_cli.core.streams import ImuSamples, time_gaps
+from armtrack_cli.session.text_table import parse_table, read_text_lines, sniff_delimiter
+
+REQUIRED = ("t", "ax", "ay", "az", "gx", "gy", "gz")
+
+
+def looks_like_generic_csv(lines: list[str]) -> bool:
+    for ln in lines[:50]:
+        if ln.startswith("#") or not ln.strip():
+            continue
+        cells = [c.strip().lower() for c in ln.replace(";", ",").replace("\t", ",").split(",")]
+        return bool(cells) and cells[0] == "t" and "ax" in cells
+    return False
+
+
+def check_times(path: Path, t: np.ndarray, line_of: np.ndarray, column: str = "t") -> None:
+    """Times must be present, finite and strictly increasing."""
+    nan = ~np.isfinite(t)
+    if nan.any():
+        idx = np.flatnonzero(nan)
+        raise ImuFileError(path, f"line {line_of[idx[0]]}: column {column!r} is empty or NaN in "
+                           f"{idx.size} rows", "sample times cannot be missing")
+    d = np.diff(t)
+    if (d == 0).any():
+        r = int(np.flatnonzero(d == 0)[0]) + 1
+        raise ImuFileError(path, f"line {line_of[r]}: time {t[r]:g} s repeats the previous row")
+    if (d < 0).any():
+        r = int(np.flatnonzero(d < 0)[0]) + 1
+        raise ImuFileError(path, f"line {line_of[r]}: time goes back from {t[r - 1]:g} to "
+                           f"{t[r]:g} s", "rows must be in time order")
+
+
+def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSamples:
+    lines = lines if lines is not None else read_text_lines(path, ImuFileError, "an IMU CSV")
+    header_at = next((i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#")),
+                     None)
+    if header_at is None:
+        raise ImuFileError(path, "has no header line")
+    delim = sniff_delimiter(lines[header_at])
+    if delim != ",":
+        seen = {"\t": "tabs", ";": "semicolons", None: "spaces"}[delim]
+        raise ImuFileError(path, f"is separated by {seen}, not commas",
+                           "the generic IMU CSV is comma-separated: t,ax,ay,az,gx,gy,gz")
+    tab = parse_table(path, lines, header_at, delim, ImuFileError, skip_prefixes=("#",))
+    names = [h.lower() for h in tab.header]
+    missing = [c for c in REQUIRED if c not in names]
+    if missing:
+        raise ImuFileError(path, f"lacks column(s) {', '.join(missing)}",
+                           f"the generic CSV needs {','.join(REQUIRED)}; header is "
+                           f"{','.join(tab.header)}")
+    t = tab.columns("t")[:, 0]
+    check_times(path, t, tab.line_of)
+    t = t - t[0]
+    acc = tab.columns("ax", "ay", "az")
+    gyr = tab.columns("gx", "gy", "gz")
+    mag = tab.columns("mx", "my", "mz") if tab.has("mx", "my", "mz") else None
+    q = None
+    if tab.has("qw", "qx", "qy", "qz"):
+        q = tab.columns("qw", "qx", "qy", "qz")
+        norm = np.linalg.norm(q, axis=1)
+        bad = np.isfinite(norm) & (np.abs(norm - 1.0) > 0.05)
+        if bad.any():
+            r = int(np.flatnonzero(bad)[0])
+            raise ImuFileError(path, f"line {tab.line_of[r]}: quaternion (qw,qx,qy,qz) has norm "
+                               f"{norm[r]:.3f}, not 1", "is the order (w, x, y, z)?")
+        q = quat.normalize(q)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    gaps = time_gaps(t, dt)
+    dropped = int(np.sum(np.round(np.diff(t)[gaps] / dt) - 1))
+    return ImuSamples(str(path), "csv", t, acc, gyr, mag, q, 1.0 / dt, dropped,
+                      "file" if q is not None else "none", tab.notes)

@@ -1,0 +1,214 @@
+"""`armtrack info`: what a session holds, read from its files, as a plain dict.
+
+Streams, rates, durations, spans on the session clock, gaps and dropped packets, markers,
+board, and what each method still needs. Reading every stream also validates it, so a
+malformed file stops here with a clear error.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, time_gaps
+from armtrack_cli.session.camera_yaml import read_camera_yaml
+from armtrack_cli.session.config import Session
+from armtrack_cli.session.imu import read_imu
+from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
+from armtrack_cli.session.video import probe_video
+
+METHODS_ARM = ("inertial", "ekf", "ukf", "pf", "pf-constraint")
+IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+
+
+def _span(t: np.ndarray, offset: float | str) -> list[float] | str:
+    """[first, last] sample on the session clock: session time = stream time + offset."""
+    if isinstance(offset, str):
+        return "unknown until synchronised (offset = \"auto\")"
+    return [round(float(t[0]) + offset, 6), round(float(t[-1]) + offset, 6)]
+
+
+def describe_imu(s: ImuSamples, offset: float | str) -> dict[str, Any]:
+    gaps = time_gaps(s.t, 1.0 / s.rate_hz)
+    empty = [f"{n}_{a}" for n, arr in (("acc", s.acc), ("gyr", s.gyr)) for a, col in
+             zip("xyz", arr.T) if np.isnan(col).all()]
+    return {
+        "file": s.path, "format": s.fmt, "samples": s.n, "rate_hz": round(s.rate_hz, 4),
+        "duration_s": round(s.duration_s, 4), "span_s": _span(s.t, offset),
+        "dropped_samples": s.dropped, "gaps": int(gaps.size),
+        "largest_gap_s": round(float(np.diff(s.t).max()), 4) if s.n > 1 else 0.0,
+        "orientation": s.orientation_source, "magnetometer": s.mag is not None,
+        "empty_channels": empty, "notes": list(s.notes),
+    }
+
+
+def describe_markers(m: MarkerTrajectories, offset: float | str) -> dict[str, Any]:
+    missing = np.isnan(m.xyz[..., 0])
+    return {
+        "file": m.path, "markers": list(m.names), "rate_hz": m.rate_hz, "frames": int(m.t.size),
+        "duration_s": round(float(m.t[-1] - m.t[0]), 4),
+        "span_s": _span(m.t, offset),
+        "missing_pct": {n: round(100.0 * float(missing[:, k].mean()), 2)
+                        for k, n in enumerate(m.names)},
+        "notes": list(m.notes),
+    }
+
+
+def check_reach(session: Session, traj: MarkerTrajectories, cols: dict[str, int]) -> dict | None:
+    """Distances from the declared shoulder to the ground-truth wrist, against L1 + L2."""
+    if session.arm is None or "wrist" not in cols:
+        return None
+    wrist = to_world(traj.xyz[:, cols["wrist"]], session.groundtruth.to_world)
+    d = np.linalg.norm(wrist - session.arm.shoulder_m, axis=1)
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return None
+    reach = session.arm.upper_arm_m + session.arm.forearm_m
+    if d.min() > reach + 0.02:
+        raise ConfigError(session.toml_path,
+                          f"[arm] shoulder_m = {session.arm.shoulder_m.tolist()} is farther than "
+                          f"L1 + L2 = {reach:.3f} m from every ground-truth wrist sample (nearest "
+                          f"{d.min():.3f} m)",
+                          "check shoulder_m is in W (metres, board frame, z up) and the lengths")
+    return {"reach_m": round(reach, 4), "wrist_distance_m": [round(float(d.min()), 4),
+                                                            round(float(d.max()), 4)],
+            "beyond_reach_pct": round(100.0 * float((d > reach + 0.01).mean()), 2)}
+
+
+def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str, Any]:
+    out: dict[str, Any] = {"session": {
+        "folder": str(session.root), "id": session.meta.id, "subject": session.meta.subject,
+        "task": session.meta.task, "side": session.meta.side, "kind": session.kind,
+        "recorded": session.meta.recorded}}
+    have: set[str] = set()
+    if session.imu is not None:
+        s = read_imu(session.imu.file, rate_hz=session.imu.rate_hz or imu_rate_hz,
+                     topic=session.imu.topic)
+        out["imu"] = describe_imu(s, session.sync.imu_offset_s)
+        out["imu"]["forearm_axis"] = session.imu.forearm_axis
+        have.add("imu")
+    cam = session.camera
+    if cam is not None and cam.video is not None:
+        v = probe_video(cam.video)
+        out["video"] = {"file": v.path, "source": v.source, "frames": v.n_frames,
+                        "fps": round(v.fps, 4), "width": v.width, "height": v.height,
+                        "duration_s": round(float(v.t[-1]) if v.n_frames else 0.0, 4),
+                        "span_s": [0.0, round(float(v.t[-1]), 6)], "times_from": v.timestamps_from}
+        have.add("video")
+        depth = session.root / "depth"
+        if depth.is_dir():
+            out["depth"] = {"folder": str(depth),
+                            "frames": len([p for p in depth.iterdir() if p.suffix == ".png"])}
+            have.add("depth")
+    if cam is not None and cam.intrinsics is not None:
+        if cam.intrinsics.is_dir():
+            imgs = [p for p in cam.intrinsics.iterdir() if p.suffix.lower() in IMAGE_EXT]
+            out["intrinsics"] = {"folder": str(cam.intrinsics), "board_images": len(imgs),
+                                 "note": "calibrate computes intrinsics from these"}
+        else:
+            K = read_camera_yaml(cam.intrinsics)
+            out["intrinsics"] = {"file": str(cam.intrinsics), "fx": K.K[0, 0], "fy": K.K[1, 1],
+                                 "cx": K.K[0, 2], "cy": K.K[1, 2], "distortion": K.dist.tolist(),
+                                 "size": [K.width, K.height]}
+        have.add("intrinsics")
+    if cam is not None and cam.board is not None:
+        b = cam.board
+        out["board"] = {"type": b.type, "squares": list(b.squares), "square_m": b.square_m,
+                        "marker_m": b.marker_m, "dictionary": b.dictionary}
+        have.add("board")
+    if cam is not None and cam.patch is not None:
+        out["patch"] = {"hsv_low": list(cam.patch.low), "hsv_high": list(cam.patch.high)}
+        have.add("patch")
+    if session.arm is not None:
+        out["arm"] = {"upper_arm_m": session.arm.upper_arm_m, "forearm_m": session.arm.forearm_m,
+                      "shoulder_m": session.arm.shoulder_m.tolist()}
+        have.add("arm")
+    if session.palm is not None:
+        out["palm"] = {"markers": list(session.palm.markers), "link_m": list(session.palm.link_m)}
+        have.add("palm")
+    if session.groundtruth is not None:
+        m = read_qualisys(session.groundtruth.file)
+        cols = select_markers(m, session.groundtruth.markers, session.toml_path)
+        out["groundtruth"] = describe_markers(m, session.sync.groundtruth_offset_s)
+        out["groundtruth"]["named"] = dict(session.groundtruth.markers)
+        reach = check_reach(session, m, cols)
+        if reach:
+            out["groundtruth"]["reach"] = reach
+        have.add("groundtruth")
+    out["methods"] = readiness(session, have)
+    return out
+
+
+def readiness(session: Session, have: set[str]) -> dict[str, str]:
+    """For each command/method: 'ready' or what the session still lacks."""
+    camera = ["video", "intrinsics", "board"]
+    needs = {m: ["imu", *camera, "patch"] for m in METHODS_ARM}
+    needs["pf-constraint"].append("arm")
+    needs["ukf-palm"] = [*camera, "palm", "depth"]
+    needs["compare"] = ["groundtruth"]
+    out = {}
+    for name, req in needs.items():
+        lack = [r for r in req if r not in have]
+        out[name] = "ready" if not lack else "needs " + ", ".join(lack)
+    return out
+
+
+def format_text(info: dict[str, Any]) -> str:
+    """The human-readable report printed by `armtrack info`."""
+    s = info["session"]
+    lines = [f"session {s['id']}  ({s['kind']} session, {s['side']} side"
+             + (f", task {s['task']}" if s["task"] else "") + ")", f"  folder  {s['folder']}"]
+    if "imu" in info:
+        i = info["imu"]
+        lines.append(f"imu       {Path(i['file']).name}  [{i['format']}]  {i['samples']} samples at "
+                     f"{i['rate_hz']:g} Hz, {i['duration_s']:.2f} s")
+        lines.append(f"          session span {_fmt_span(i['span_s'])}; dropped samples "
+                     f"{i['dropped_samples']} in {i['gaps']} gaps (largest {i['largest_gap_s']} s)")
+        lines.append(f"          orientation: {i['orientation']}; forearm axis {i['forearm_axis']}")
+        for ch in i["empty_channels"]:
+            lines.append(f"          warning: {ch} has no data")
+        for n in i["notes"]:
+            lines.append(f"          note: {n}")
+    if "video" in info:
+        v = info["video"]
+        lines.append(f"video     {Path(v['file']).name}  {v['frames']} frames {v['width']}x"
+                     f"{v['height']} at {v['fps']:g} fps, {v['duration_s']:.2f} s "
+                     f"(times from {v['times_from']})")
+    if "depth" in info:
+        lines.append(f"depth     {info['depth']['frames']} frames in depth/")
+    if "intrinsics" in info:
+        k = info["intrinsics"]
+        lines.append(f"camera    {k['board_images']} board images in calib/" if "folder" in k else
+                     f"camera    fx {k['fx']:.1f} fy {k['fy']:.1f} cx {k['cx']:.1f} cy {k['cy']:.1f}"
+                     f", {k['size'][0]}x{k['size'][1]}")
+    if "board" in info:
+        b = info["board"]
+        lines.append(f"board     {b['type']} {b['squares'][0]}x{b['squares'][1]} squares of "
+                     f"{b['square_m'] * 100:g} cm, {b['dictionary']}")
+    if "arm" in info:
+        a = info["arm"]
+        lines.append(f"arm       L1 {a['upper_arm_m']} m, L2 {a['forearm_m']} m, shoulder "
+                     f"{a['shoulder_m']} m in W")
+    if "palm" in info:
+        lines.append(f"palm      markers {', '.join(info['palm']['markers'])}")
+    if "groundtruth" in info:
+        g = info["groundtruth"]
+        lines.append(f"qualisys  {Path(g['file']).name}  {g['frames']} frames at {g['rate_hz']:g} Hz, "
+                     f"{g['duration_s']:.2f} s; session span {_fmt_span(g['span_s'])}")
+        miss = ", ".join(f"{k} {v:g}%" for k, v in g["missing_pct"].items())
+        lines.append(f"          markers missing: {miss}")
+        if "reach" in g:
+            r = g["reach"]
+            lines.append(f"          wrist {r['wrist_distance_m'][0]}-{r['wrist_distance_m'][1]} m "
+                         f"from the shoulder (reach {r['reach_m']} m)")
+    lines.append("methods")
+    for name, state in info["methods"].items():
+        lines.append(f"  {name:<14}{state}")
+    return "\n".join(lines)
+
+
+def _fmt_span(span) -> str:
+    return span if isinstance(span, str) else f"{span[0]:.3f} … {span[1]:.3f} s"

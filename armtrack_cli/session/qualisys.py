@@ -1,0 +1,124 @@
+"""Qualisys Track Manager 3-D TSV exports, new and old (SESSION_FORMAT.md, "Qualisys TSV").
+
+Header ``KEY<TAB>value`` lines, then the table with or without a ``Frame Time …`` row and
+with or without frame/time columns. Gaps (empty, NaN or all-zero cells) become NaN, never
+the origin. Millimetres are converted to metres here.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.streams import MarkerTrajectories
+from armtrack_cli.session.text_table import parse_table, read_text_lines
+
+MM = 1e-3  # QTM exports millimetres
+_KEY = re.compile(r"^[A-Z][A-Z0-9_]*(\t|$)")
+
+
+def _header(path: Path, lines: list[str]) -> tuple[dict[str, list[str]], int]:
+    keys: dict[str, list[str]] = {}
+    at = 0
+    while at < len(lines) and (not lines[at].strip() or _KEY.match(lines[at])):
+        parts = [p.strip() for p in lines[at].split("\t")]
+        while len(parts) > 1 and parts[-1] == "":
+            parts.pop()
+        if parts[0]:
+            keys[parts[0]] = parts[1:]
+        at += 1
+    return keys, at
+
+
+def read_qualisys(path: str | Path) -> MarkerTrajectories:
+    path = Path(path)
+    lines = read_text_lines(path, GroundTruthError, "a Qualisys TSV export")
+    keys, at = _header(path, lines)
+    if "NO_OF_BODIES" in keys or "BODY_NAMES" in keys or keys.get("DATA_INCLUDED", [""])[0] == "6D":
+        raise GroundTruthError(path, "is a 6DOF (rigid body) export",
+                               "export 3D marker data from QTM (File > Export > TSV, 3D)")
+    if "MARKER_NAMES" not in keys:
+        raise GroundTruthError(path, "has no MARKER_NAMES line",
+                               "is it a QTM 3D TSV export? (header keys seen: "
+                               f"{', '.join(keys) or 'none'})")
+    names = tuple(keys["MARKER_NAMES"])
+    if not names:
+        raise GroundTruthError(path, "MARKER_NAMES lists no markers")
+    if len(set(names)) != len(names):
+        raise GroundTruthError(path, "MARKER_NAMES names a marker twice")
+    freq_text = (keys.get("FREQUENCY") or [""])[0]
+    try:
+        freq = float(freq_text)
+    except ValueError:
+        freq = float("nan")
+    if not np.isfinite(freq) or freq <= 0:
+        raise GroundTruthError(path, f"FREQUENCY is {freq_text!r}, not a frame rate",
+                               "a QTM export states its frame rate in Hz")
+    if at >= len(lines):
+        raise GroundTruthError(path, "has a header but no data (truncated export?)")
+    m = len(names)
+    has_row = lines[at].split("\t")[0].strip().lower() == "frame"
+    if has_row:
+        tab = parse_table(path, lines, at, "\t", GroundTruthError)
+        cols = [h.lower() for h in tab.header]
+        frame_col = cols.index("frame") if "frame" in cols else None
+        time_col = cols.index("time") if "time" in cols else None
+        first = len([c for c in (frame_col, time_col) if c is not None])
+    else:
+        fake = "\t".join(f"c{k}" for k in range(len(lines[at].rstrip("\t\r\n").split("\t"))))
+        tab = parse_table(path, [fake] + lines[at:], 0, "\t", GroundTruthError)
+        tab = type(tab)(tab.header, tab.data, tab.line_of + at - 1, tab.notes)
+        n = tab.data.shape[1]
+        first = n - 3 * m
+        if first not in (0, 1, 2):
+            raise GroundTruthError(path, f"line {at + 1} has {n} columns, which does not fit "
+                                   f"{m} markers (MARKER_NAMES) x 3 coordinates",
+                                   "is MARKER_NAMES complete?")
+        frame_col = 0 if first >= 1 else None
+        time_col = 1 if first == 2 else None
+    coords = tab.data[:, first:]
+    if coords.shape[1] != 3 * m:
+        raise GroundTruthError(path, f"has {coords.shape[1]} coordinate columns for {m} markers "
+                               f"(expected {3 * m})", "is MARKER_NAMES complete?")
+    xyz = coords.reshape(-1, m, 3) * MM
+    xyz[np.all(xyz == 0.0, axis=2)] = np.nan  # QTM writes gaps as zeros in some versions
+    xyz[np.any(np.isnan(xyz), axis=2)] = np.nan
+    if time_col is not None:
+        t = tab.data[:, time_col]
+    elif frame_col is not None:
+        t = (tab.data[:, frame_col] - 1) / freq
+    else:
+        t = np.arange(xyz.shape[0]) / freq
+    if not np.isfinite(t).all():
+        r = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise GroundTruthError(path, f"line {tab.line_of[r]}: the time/frame cell is empty")
+    d = np.diff(t)
+    if (d <= 0).any():
+        r = int(np.flatnonzero(d <= 0)[0]) + 1
+        raise GroundTruthError(path, f"line {tab.line_of[r]}: time goes from {t[r - 1]:g} to "
+                               f"{t[r]:g} s", "frames must be in increasing time order")
+    notes = list(tab.notes)
+    n_frames = keys.get("NO_OF_FRAMES", [None])[0]
+    if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
+        notes.append(f"NO_OF_FRAMES says {n_frames}, the table has {xyz.shape[0]} rows")
+    return MarkerTrajectories(str(path), t, names, xyz, freq, tuple(notes))
+
+
+def select_markers(traj: MarkerTrajectories, wanted: dict[str, str], toml: Path) -> dict[str, int]:
+    """{role: column} for the markers session.toml names; unknown names are an error."""
+    out = {}
+    for role, name in wanted.items():
+        if name not in traj.names:
+            raise GroundTruthError(traj.path, f"has no marker {name!r} ([groundtruth] markers."
+                                   f"{role} in {toml.name})",
+                                   f"its markers are {', '.join(traj.names)}")
+        out[role] = traj.names.index(name)
+    return out
+
+
+def to_world(xyz: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Apply the 4x4 Qualisys -> W transform to (..., 3) points in metres; NaN stays NaN."""
+    return xyz @ T[:3, :3].T + T[:3, 3]

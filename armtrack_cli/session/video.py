@@ -1,0 +1,164 @@
+"""Camera frames and their session times: any container OpenCV's FFmpeg reads, or
+compressed images in an MCAP (``sensor_msgs/msg/CompressedImage``, ``foxglove.CompressedImage``).
+
+Frame i is at i / fps on the session clock unless ``video_timestamps.csv`` (frame,t) says
+otherwise; MCAP frames use their stamps relative to the first. Frames are streamed.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+from collections.abc import Iterator
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from armtrack_cli.core.errors import VideoError
+from armtrack_cli.core.streams import VideoStream
+from armtrack_cli.session import imu_mcap
+from armtrack_cli.session.text_table import parse_table, read_text_lines
+
+IMAGE_SCHEMAS = ("sensor_msgs/msg/CompressedImage", "foxglove.CompressedImage")
+
+
+def _capture(path: Path) -> cv2.VideoCapture:
+    cap = cv2.VideoCapture(str(path), cv2.CAP_FFMPEG)
+    if not cap.isOpened():
+        raise VideoError(path, "is not a video OpenCV's FFmpeg can open",
+                         "use .mp4, .avi or .mkv, or check the file is complete")
+    return cap
+
+
+def read_timestamps(path: Path, n_frames: int) -> np.ndarray:
+    lines = read_text_lines(path, VideoError, "video_timestamps.csv (frame,t)")
+    tab = parse_table(path, lines, 0, ",", VideoError)
+    if not tab.has("frame", "t"):
+        raise VideoError(path, f"has columns {','.join(tab.header)}, expected frame,t")
+    frame, t = tab.columns("frame")[:, 0], tab.columns("t")[:, 0]
+    if not np.isfinite(t).all() or not np.isfinite(frame).all():
+        raise VideoError(path, "has empty frame or t cells")
+    if not np.array_equal(frame, np.arange(frame.size)):
+        raise VideoError(path, "frame column must count 0, 1, 2, … without gaps")
+    if (np.diff(t) <= 0).any():
+        r = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+        raise VideoError(path, f"line {tab.line_of[r]}: t does not increase ({t[r - 1]:g} then "
+                         f"{t[r]:g})")
+    if frame.size != n_frames:
+        raise VideoError(path, f"lists {frame.size} frames but the video has {n_frames}")
+    return t
+
+
+def probe_video(path: str | Path, *, topic: str | None = None) -> VideoStream:
+    """What the camera recording holds, without keeping its frames."""
+    path = Path(path)
+    if not path.exists():
+        raise VideoError(path, "not found", "check [camera] video in session.toml")
+    if path.is_dir():
+        raise VideoError(path, "is a folder, not a video")
+    if path.stat().st_size == 0:
+        raise VideoError(path, "is empty (0 bytes)")
+    with open(path, "rb") as f:
+        if f.read(8) == imu_mcap.MAGIC:
+            return _probe_mcap(path, topic)
+    cap = _capture(path)
+    try:
+        ok, frame = cap.read()
+        if not ok or frame is None:
+            raise VideoError(path, "has no decodable frames")
+        fps = float(cap.get(cv2.CAP_PROP_FPS))
+        n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+        if n <= 0:  # containers without a frame count: count by grabbing
+            n = 1
+            while cap.grab():
+                n += 1
+    finally:
+        cap.release()
+    h, w = frame.shape[:2]
+    ts_path = path.parent / "video_timestamps.csv"
+    if ts_path.exists():
+        t = read_timestamps(ts_path, n)
+        fps = float(1.0 / np.median(np.diff(t))) if n > 1 else fps
+        source = "video_timestamps.csv"
+    else:
+        if not (np.isfinite(fps) and fps > 0):
+            raise VideoError(path, "states no frame rate", "add video_timestamps.csv (frame,t)")
+        t = np.arange(n) / fps
+        source = "fps"
+    return VideoStream(str(path), "file", n, fps, w, h, t, source)
+
+
+def iter_frames(video: VideoStream) -> Iterator[tuple[int, float, np.ndarray]]:
+    """(index, session time, BGR uint8 image) for every frame, streamed."""
+    if video.source == "mcap":
+        yield from _iter_mcap(video)
+        return
+    cap = _capture(Path(video.path))
+    try:
+        i = 0
+        while i < video.n_frames:
+            ok, frame = cap.read()
+            if not ok:
+                break
+            yield i, float(video.t[i]), frame
+            i += 1
+    finally:
+        cap.release()
+
+
+# ---------------------------------------------------------------- MCAP images
+
+def _image_messages(path: Path, topic: str):
+    reader, f = imu_mcap.open_summary(path, VideoError)
+    try:
+        from mcap_ros2.decoder import DecoderFactory
+
+        factory = DecoderFactory()
+        for schema, channel, message in reader.iter_messages(topics=[topic]):
+            if channel.message_encoding == "cdr":
+                m = factory.decoder_for("cdr", schema)(message.data)
+                st = m.header.stamp
+                t = st.sec + st.nanosec * 1e-9 if (st.sec or st.nanosec) else message.log_time * 1e-9
+                yield t, bytes(m.data)
+            elif channel.message_encoding == "json":
+                m = json.loads(message.data)
+                st = m.get("timestamp", {})
+                t = st.get("sec", 0) + st.get("nsec", 0) * 1e-9 or message.log_time * 1e-9
+                yield t, base64.b64decode(m["data"])
+            else:
+                raise VideoError(path, f"topic {topic}: message encoding "
+                                 f"{channel.message_encoding!r} is not cdr or json")
+    finally:
+        f.close()
+
+
+def _probe_mcap(path: Path, topic: str | None) -> VideoStream:
+    reader, f = imu_mcap.open_summary(path, VideoError)
+    try:
+        chans = imu_mcap.channels(reader, path, VideoError)
+    finally:
+        f.close()
+    topic, _ = imu_mcap.pick_topic(path, chans, IMAGE_SCHEMAS, topic, VideoError, "camera image",
+                                   "[camera] video")
+    times, first = [], None
+    for t, data in _image_messages(path, topic):
+        times.append(t)
+        if first is None:
+            first = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+            if first is None:
+                raise VideoError(path, f"topic {topic}: the first image cannot be decoded")
+    t = np.asarray(times) - times[0]
+    if (np.diff(t) <= 0).any():
+        raise VideoError(path, f"topic {topic}: image stamps do not increase")
+    fps = float(1.0 / np.median(np.diff(t))) if t.size > 1 else 0.0
+    h, w = first.shape[:2]
+    return VideoStream(str(path), "mcap", len(times), fps, w, h, t, "mcap", topic)
+
+
+def _iter_mcap(video: VideoStream) -> Iterator[tuple[int, float, np.ndarray]]:
+    for i, (_, data) in enumerate(_image_messages(Path(video.path), video.topic)):
+        img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+        if img is None:
+            raise VideoError(video.path, f"topic {video.topic}: image {i} cannot be decoded")
+        yield i, float(video.t[i]), img

@@ -1,0 +1,250 @@
+"""Xsens exports: MT Manager text files of every generation, and Xsens DOT CSV.
+
+MT Manager: ``//`` comment header (legacy ``// Update Rate: 100.0Hz``; 2019+ ``// General
+information:`` with ``// Coordinate system: ENU|NED|NWU``), then a tab/comma/semicolon/space
+separated table. DOT: a ``sep=,`` first line, free-text metadata, SampleTimeFine in µs,
+gyro in deg/s, FreeAcc (gravity removed, in the global frame).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.core.errors import ImuFileError
+from armtrack_cli.core.streams import ImuSamples
+from armtrack_cli.session.text_table import (
+    TextTable,
+    parse_table,
+    read_text_lines,
+    sniff_delimiter,
+    split_row,
+)
+
+GRAVITY = 9.81
+STF_WRAP = 2**32  # SampleTimeFine is a uint32
+COUNTER_WRAP = 2**16  # PacketCounter is a uint16
+# NED is z-down: turn it 180° about x (x kept, y and z negated) to get a z-up frame. Xsens
+# applies NED/NWU to the local frame only (MTi User Manual, "RotLocal"), so the calibrated
+# data stay in the sensor frame S; ENU and NWU are already z-up and are used as they are.
+Q_NED_TO_ZUP = np.array([0.0, 1.0, 0.0, 0.0])
+_HEADER_HINTS = ("packetcounter", "sampletimefine", "acc_x", "quat_q0", "quat_w", "freeacc_x")
+
+
+def looks_like_mt_manager(lines: list[str]) -> bool:
+    if lines and lines[0].startswith("//"):
+        return True
+    for ln in lines[:200]:
+        if ln.startswith("//") or not ln.strip():
+            continue
+        return any(h in ln.lower() for h in _HEADER_HINTS)
+    return False
+
+
+def looks_like_dot(lines: list[str]) -> bool:
+    return bool(lines) and lines[0].strip().lower().startswith("sep=")
+
+
+def _column_name(raw: str) -> str:
+    """'Gyr_X (°/s)' -> 'Gyr_X'; units are read separately by _unit."""
+    return re.split(r"[\s(\[]", raw.strip(), maxsplit=1)[0] if not raw.startswith("Mat[") else raw
+
+
+def _vec(tab: TextTable, names: list[str]) -> np.ndarray | None:
+    return tab.columns(*names) if tab.has(*names) else None
+
+
+def _unwrap(v: np.ndarray, wrap: int) -> np.ndarray:
+    """Counts that wrap at ``wrap``, made monotonic; differences taken modulo wrap."""
+    d = np.mod(np.diff(v), wrap)
+    return np.concatenate([[0.0], np.cumsum(d)])
+
+
+def _counter_steps(path: Path, tab: TextTable, counter: np.ndarray) -> np.ndarray:
+    """Steps between consecutive packet counters (1 = none lost), checked for repeats."""
+    if np.isnan(counter).any():
+        r = int(np.flatnonzero(np.isnan(counter))[0])
+        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter is empty")
+    d = np.mod(np.diff(counter), COUNTER_WRAP)
+    if (d == 0).any():
+        r = int(np.flatnonzero(d == 0)[0]) + 1
+        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter {int(counter[r])} "
+                           "repeats the previous packet", "is the file two recordings pasted together?")
+    if (d > COUNTER_WRAP // 2).any():
+        r = int(np.flatnonzero(d > COUNTER_WRAP // 2)[0]) + 1
+        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter jumps back from "
+                           f"{int(counter[r - 1])} to {int(counter[r])}",
+                           "rows are out of order or the file mixes recordings")
+    return d
+
+
+def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float | None,
+           rate_hz: float | None) -> tuple[np.ndarray, float, int, list[str]]:
+    """Stream times (s from the first sample), nominal rate, dropped-sample count, notes.
+
+    SampleTimeFine gives true times (unwrapped at 2^32); without it PacketCounter gives them
+    at the nominal rate, so dropped packets keep their true place and nothing is shifted.
+    """
+    notes: list[str] = []
+    counter = _vec(tab, ["PacketCounter"])
+    steps = _counter_steps(path, tab, counter[:, 0]) if counter is not None else None
+    dropped = int(np.sum(steps - 1)) if steps is not None else 0
+    stf = _vec(tab, ["SampleTimeFine"])
+    if stf is not None and np.isfinite(stf).all():
+        t = _unwrap(stf[:, 0], STF_WRAP) * stf_tick_s
+        if (np.diff(t) <= 0).any():
+            r = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
+            raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine does not increase")
+        per_step = np.diff(t) / (steps if steps is not None else 1)
+        rate = header_rate or float(1.0 / np.median(per_step))
+        return t, rate, dropped, notes
+    if stf is not None and np.isfinite(stf).any():
+        r = int(np.flatnonzero(~np.isfinite(stf[:, 0]))[0])
+        raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine is missing in some rows "
+                           "but not all")
+    rate = header_rate or rate_hz
+    if rate is None:
+        raise ImuFileError(path, "states no update rate and has no SampleTimeFine",
+                           "set [imu] rate_hz in session.toml to the rate it was recorded at")
+    if steps is None:
+        notes.append("no PacketCounter: dropped samples cannot be detected")
+        return np.arange(tab.data.shape[0]) / rate, rate, 0, notes
+    return np.concatenate([[0.0], np.cumsum(steps)]) / rate, rate, dropped, notes
+
+
+def _orientation(path: Path, tab: TextTable) -> np.ndarray | None:
+    """(N, 4) quaternions (w, x, y, z) R_GS from whichever orientation columns exist."""
+    q = _vec(tab, ["Quat_q0", "Quat_q1", "Quat_q2", "Quat_q3"])
+    if q is None:
+        q = _vec(tab, ["Quat_W", "Quat_X", "Quat_Y", "Quat_Z"])  # DOT
+    if q is not None:
+        return q
+    names = [f"Mat[{i}][{j}]" for i in (1, 2, 3) for j in (1, 2, 3)]
+    m = _vec(tab, names)
+    if m is not None:  # Mat[i][j] is R_GS[i-1][j-1] (checked against Quat_q in MT Manager 2022)
+        R = m.reshape(-1, 3, 3)
+        q = np.full((R.shape[0], 4), np.nan)
+        ok = np.isfinite(R).all(axis=(1, 2))
+        q[ok] = quat.from_matrix(R[ok])
+        return q
+    e = _vec(tab, ["Roll", "Pitch", "Yaw"])
+    if e is None:
+        e = _vec(tab, ["Euler_X", "Euler_Y", "Euler_Z"])  # DOT: roll, pitch, yaw
+    if e is not None:  # degrees, R = Rz(yaw) Ry(pitch) Rx(roll)
+        e = np.deg2rad(e)
+        return quat.from_euler_zyx(e[:, 0], e[:, 1], e[:, 2])
+    return None
+
+
+def _check_quat_norm(path: Path, tab: TextTable, q: np.ndarray) -> np.ndarray:
+    norm = np.linalg.norm(q, axis=1)
+    bad = np.isfinite(norm) & (np.abs(norm - 1.0) > 0.05)
+    if bad.any():
+        r = int(np.flatnonzero(bad)[0])
+        raise ImuFileError(path, f"line {tab.line_of[r]}: orientation quaternion has norm "
+                           f"{norm[r]:.3f}, not 1", "are the columns mislabelled or scaled?")
+    return quat.normalize(q)
+
+
+def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_rate: float | None,
+           rate_hz: float | None, gyro_scale: float, coord: str, notes: list[str]) -> ImuSamples:
+    t, rate, dropped, tnotes = _times(path, tab, stf_tick_s=stf_tick_s, header_rate=header_rate,
+                                      rate_hz=rate_hz)
+    q = _orientation(path, tab)
+    if q is not None:
+        q = _check_quat_norm(path, tab, q)
+        if coord == "NED":
+            q = quat.multiply(Q_NED_TO_ZUP, q)
+            notes.append("orientation converted from NED to z-up (180° about x)")
+    acc = _vec(tab, ["Acc_X", "Acc_Y", "Acc_Z"])
+    if acc is None:
+        free = _vec(tab, ["FreeAcc_X", "FreeAcc_Y", "FreeAcc_Z"])
+        if free is None or q is None:
+            raise ImuFileError(path, "has no Acc_X/Acc_Y/Acc_Z columns",
+                               f"export the accelerometer; columns seen: {', '.join(tab.header)}")
+        # FreeAcc = a_W (gravity removed, global frame): f_B = R_WBᵀ (a_W − g_W)
+        acc = quat.rotate(quat.conjugate(q), free + np.array([0.0, 0.0, GRAVITY]))
+        notes.append("specific force rebuilt from FreeAcc and orientation")
+    gyr = _vec(tab, ["Gyr_X", "Gyr_Y", "Gyr_Z"])
+    if gyr is None:
+        if q is None:
+            raise ImuFileError(path, "has neither gyroscope (Gyr_X..Z) nor orientation columns",
+                               "export Gyr_X..Z or an orientation (quaternion, matrix or Euler)")
+        gyr = np.full_like(acc, np.nan)
+        notes.append("no gyroscope columns")
+    else:
+        gyr = gyr * gyro_scale
+    mag = _vec(tab, ["Mag_X", "Mag_Y", "Mag_Z"])
+    for name, arr in (("Acc", acc), ("Gyr", gyr)):
+        for k, ax in enumerate("XYZ"):
+            if np.isnan(arr[:, k]).all() and not (name == "Gyr" and "no gyroscope columns" in notes):
+                notes.append(f"{name}_{ax} is empty (NaN) in every row")
+    return ImuSamples(str(path), fmt, t, acc, gyr, mag, q, rate, dropped,
+                      "file" if q is not None else "none", tuple(notes + tnotes + list(tab.notes)))
+
+
+def read_mt_manager(path: Path, *, rate_hz: float | None = None,
+                    lines: list[str] | None = None) -> ImuSamples:
+    """An MT Manager text export (legacy, 2019/2020, 2022; any delimiter)."""
+    lines = lines if lines is not None else read_text_lines(path, ImuFileError,
+                                                            "an Xsens MT Manager export")
+    header_rate, coord, notes = None, "ENU", []
+    header_at = None
+    for i, ln in enumerate(lines):
+        if ln.startswith("//"):
+            m = re.search(r"update rate:\s*([0-9.]+)\s*hz", ln, re.I)
+            if m:
+                header_rate = float(m.group(1))
+            m = re.search(r"coordinate system:\s*(\w+)", ln, re.I)
+            if m:
+                coord = m.group(1).upper()
+                if coord not in ("ENU", "NED", "NWU"):
+                    raise ImuFileError(path, f"line {i + 1}: coordinate system {coord!r} is not "
+                                       "ENU, NED or NWU")
+            continue
+        if ln.strip():
+            header_at = i
+            break
+    if header_at is None:
+        raise ImuFileError(path, "has only comment lines: no column header and no data "
+                           "(truncated export?)")
+    delim = sniff_delimiter(lines[header_at])
+    tab = parse_table(path, lines, header_at, delim, ImuFileError)
+    tab = TextTable([_column_name(h) for h in tab.header], tab.data, tab.line_of, tab.notes)
+    if coord != "ENU":
+        notes.append(f"coordinate system {coord}")
+    return _build(path, tab, "xsens-mt", stf_tick_s=1e-4, header_rate=header_rate,
+                  rate_hz=rate_hz, gyro_scale=1.0, coord=coord, notes=notes)
+
+
+def _unit(raw: str) -> str:
+    m = re.search(r"[(\[]([^)\]]*)[)\]]", raw)
+    return m.group(1).strip().lower() if m else ""
+
+
+def read_dot(path: Path, *, rate_hz: float | None = None,
+             lines: list[str] | None = None) -> ImuSamples:
+    """An Xsens (Movella) DOT CSV export: ``sep=,`` line, metadata, then the table."""
+    lines = lines if lines is not None else read_text_lines(path, ImuFileError,
+                                                            "an Xsens DOT CSV export")
+    delim = lines[0].strip()[4:5] or ","
+    header_at = None
+    for i, ln in enumerate(lines[1:], start=1):
+        low = ln.lower()
+        if "packetcounter" in low or "sampletimefine" in low:
+            header_at = i
+            break
+    if header_at is None:
+        raise ImuFileError(path, "is a DOT export (sep= line) without a PacketCounter/"
+                           "SampleTimeFine header row")
+    raw_header = split_row(lines[header_at], delim)
+    tab = parse_table(path, lines, header_at, delim, ImuFileError)
+    tab = TextTable([_column_name(h) for h in tab.header], tab.data, tab.line_of, tab.notes)
+    gyr_units = [_unit(h) for h in raw_header if h.lower().startswith("gyr_")]
+    # DOT reports angular rate in deg/s unless the header says rad/s
+    gyro_scale = 1.0 if gyr_units and "rad" in gyr_units[0] else np.pi / 180.0
+    return _build(path, tab, "xsens-dot", stf_tick_s=1e-6, header_rate=None, rate_hz=rate_hz,
+                  gyro_scale=gyro_scale, coord="ENU", notes=[])

@@ -1,0 +1,77 @@
+"""The layering of STYLE.md, kept true by walking the imports with ast.
+
+cli -> pipeline -> stages (session I/O, calibrate, detect, fuse, compare, report, simulate)
+-> filters -> core. A module imports only from its own component or a lower layer; stages
+never import each other; only cli imports click; only session (I/O) and cli touch files.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PKG = Path(__file__).resolve().parents[1] / "armtrack_cli"
+RANK = {"cli": 5, "pipeline": 4, "session": 3, "calibrate": 3, "detect": 3, "fuse": 3,
+        "compare": 3, "report": 3, "simulate": 3, "filters": 2, "core": 1}
+FILE_CALLS = {"open", "read_bytes", "write_bytes", "read_text", "write_text", "imread", "imwrite",
+              "VideoCapture", "VideoWriter", "read_csv", "to_csv", "FileStorage", "savez",
+              "savez_compressed", "mkstemp"}
+
+
+def _component(path: Path) -> str:
+    rel = path.relative_to(PKG)
+    return rel.parts[0].removesuffix(".py") if rel.parts[0] != "__init__.py" else "root"
+
+
+def _modules():
+    for path in sorted(PKG.rglob("*.py")):
+        yield path, _component(path), ast.parse(path.read_text(), str(path))
+
+
+def _imports(tree):
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                yield a.name
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            yield node.module
+
+
+def test_every_component_has_a_layer():
+    comps = {c for _, c, _ in _modules()} - {"root"}
+    assert comps <= set(RANK), f"unranked components: {comps - set(RANK)}"
+
+
+def test_imports_go_down_the_layers():
+    bad = []
+    for path, comp, tree in _modules():
+        for mod in _imports(tree):
+            if not mod.startswith("armtrack_cli."):
+                continue
+            target = mod.split(".")[1]
+            if comp == "root" or target == comp:
+                continue
+            if RANK.get(target, 0) >= RANK.get(comp, 0):
+                bad.append(f"{path.relative_to(PKG)} imports {mod}")
+    assert not bad, "layering broken:\n" + "\n".join(bad)
+
+
+def test_only_the_cli_imports_click():
+    users = [str(p.relative_to(PKG)) for p, c, tree in _modules()
+             if any(m.split(".")[0] == "click" for m in _imports(tree))]
+    assert users == ["cli.py"]
+
+
+def test_only_the_io_layer_touches_files():
+    bad = []
+    for path, comp, tree in _modules():
+        if comp in ("session", "cli"):
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call):
+                f = node.func
+                name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(
+                    f, ast.Attribute) else None
+                if name in FILE_CALLS:
+                    bad.append(f"{path.relative_to(PKG)}:{node.lineno} calls {name}")
+    assert not bad, "file access outside the I/O layer:\n" + "\n".join(bad)
