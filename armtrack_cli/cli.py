@@ -74,6 +74,104 @@ def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | Non
         click.echo(pipeline.format_info(result))
 
 
+@main.command()
+@click.argument("out", type=click.Path(file_okay=False))
+@click.option("--task", type=click.Choice(["circle", "rectangle", "reach", "figure8"]),
+              default="circle", show_default=True, help="Rehabilitation task the wrist performs.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Random seed (same seed, "
+              "same bytes).")
+@click.option("--duration", type=click.FloatRange(min=4.0, max=3600.0), default=20.0,
+              show_default=True, help="Length of the video, s.")
+@click.option("--imu-format", type=click.Choice(["xsens", "csv", "mcap"]), default="xsens",
+              show_default=True, help="IMU file written: Xsens MT Manager export, generic CSV, "
+              "ROS 2 MCAP.")
+@click.option("--imu-preset", type=click.Choice(["mtw", "consumer", "ideal"]), default="mtw",
+              show_default=True, help="IMU error levels: MTw-class, consumer-grade, or none.")
+@click.option("--acc-noise", type=float, help="Override: accelerometer white noise, m/s².")
+@click.option("--acc-bias", type=float, help="Override: accelerometer bias per axis, m/s².")
+@click.option("--gyro-noise", type=float, help="Override: gyro white noise, rad/s.")
+@click.option("--gyro-bias", type=float, help="Override: gyro bias per axis, rad/s.")
+@click.option("--orientation-error", "orientation_rms_deg", type=float,
+              help="Override: RMS error of the output orientation, degrees.")
+@click.option("--drop-rate", type=click.FloatRange(0.0, 0.5), default=0.0, show_default=True,
+              help="Fraction of IMU packets dropped, in bursts.")
+@click.option("--fps", type=click.FloatRange(min=1.0, max=240.0), default=30.0, show_default=True)
+@click.option("--imu-rate", type=click.FloatRange(min=20.0, max=1000.0), default=100.0,
+              show_default=True, help="IMU rate, Hz.")
+@click.option("--qualisys-hz", type=click.Choice(["100", "200"]), default="100", show_default=True)
+@click.option("--gt-gaps", type=click.IntRange(0, 50), default=0, show_default=True,
+              help="Gaps of 0.1-0.4 s in the Qualisys wrist marker.")
+@click.option("--distractor", is_flag=True, help="A disc of the patch's hue on the table.")
+@click.option("--occlusion", "occlusions", multiple=True, metavar="START:DURATION",
+              help="A card hides the patch from START for DURATION seconds (repeatable).")
+@click.option("--no-distortion", is_flag=True, help="An ideal pinhole lens.")
+@click.option("--undeclared-imu-offset", is_flag=True,
+              help="Write imu_offset_s = \"auto\" (the truth file keeps the real offset).")
+@click.option("--force", is_flag=True, help="Replace OUT if it exists.")
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
+@out_option
+def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
+             gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
+             distractor, occlusions, no_distortion, undeclared_imu_offset, force, as_json,
+             out_dir) -> None:
+    """Write a simulated arm session folder OUT (session.toml, video, IMU, Qualisys,
+    intrinsics) and its exact truth beside it as OUT.truth.npz."""
+    from armtrack_cli.simulate.arm_session import ArmSimSettings
+
+    occ = []
+    for spec in occlusions:
+        try:
+            start, dur = (float(x) for x in spec.split(":"))
+        except ValueError:
+            raise click.BadParameter(f"{spec!r} is not START:DURATION", param_hint="--occlusion")
+        occ.append((start, dur))
+    errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
+              "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
+    settings = ArmSimSettings(
+        task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
+        imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
+        drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
+        distractor=distractor, occlusions=tuple(occ), distortion=not no_distortion,
+        declare_imu_offset=not undeclared_imu_offset)
+    target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
+    n_frames = int(round(duration * fps))
+    with _progress(n_frames, "rendering", quiet=as_json) as bar:
+        result = pipeline.simulate(target, settings, imu_format=imu_format, force=force,
+                                   on_frame=bar)
+    if as_json:
+        click.echo(json.dumps(result, indent=2, sort_keys=True))
+    else:
+        click.echo(f"wrote {result['session']} ({result['frames']} frames, "
+                   f"{result['imu_samples']} IMU samples, {result['qualisys_frames']} Qualisys "
+                   f"frames) and {result['truth']}")
+
+
+class _progress:
+    """A progress bar on stderr when it is a terminal (quiet in CI, pipes and --json)."""
+
+    def __init__(self, total: int, label: str, *, quiet: bool = False):
+        self.total, self.label = total, label
+        self.enabled = not quiet and sys.stderr.isatty() and not os.environ.get("CI")
+        self.bar = None
+        self.done = 0
+
+    def __enter__(self):
+        if self.enabled:
+            self.bar = click.progressbar(length=self.total, label=self.label, file=sys.stderr)
+            self.bar.__enter__()
+        return self
+
+    def __call__(self, n: int) -> None:
+        if self.bar is not None:
+            self.bar.update(n - self.done)
+        self.done = n
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.__exit__(*exc)
+        return False
+
+
 def render_reference() -> str:
     """docs/cli.md: every command's --help, generated (a test keeps it in step)."""
     parts = ["# armtrack command-line reference", "",

@@ -31,11 +31,18 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
     tmp_path = Path(tmp)
     try:
         write(tmp_path)
+        os.chmod(tmp_path, 0o666 & ~_umask())  # mkstemp makes 0600; outputs are shared data
         os.replace(tmp_path, path)
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise
     return path
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def write_bytes(path: str | Path, data: bytes) -> Path:
@@ -65,3 +72,39 @@ def write_table(path: str | Path, table: pd.DataFrame, *, command: str,
                {"armtrack_version": __version__, "command": command, "settings": settings or {}})
     return out
 
+
+
+def write_npz(path: str | Path, arrays: dict[str, Any]) -> Path:
+    """Compressed numpy archive, written atomically."""
+    import numpy as np
+
+    return atomic_write(path, lambda p: np.savez_compressed(p, **arrays))
+
+
+def staged_folder(final: str | Path, *, force: bool = False):
+    """Context manager: a temp folder beside ``final`` renamed onto it when the block succeeds.
+
+    A failed run leaves neither a half-written folder nor the temp folder behind.
+    """
+    import contextlib
+    import shutil
+
+    final = Path(final)
+    if final.exists() and not force:
+        raise OutputError(final, "already exists", "choose another OUT or pass --force")
+
+    @contextlib.contextmanager
+    def _stage():
+        final.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", dir=final.parent))
+        os.chmod(tmp, 0o777 & ~_umask())
+        try:
+            yield tmp
+            if final.exists():
+                shutil.rmtree(final)
+            os.replace(tmp, final)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+
+    return _stage()
