@@ -123,7 +123,8 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
         try:
             start, dur = (float(x) for x in spec.split(":"))
         except ValueError:
-            raise click.BadParameter(f"{spec!r} is not START:DURATION", param_hint="--occlusion")
+            raise click.BadParameter(f"{spec!r} is not START:DURATION",
+                                     param_hint="--occlusion") from None
         occ.append((start, dur))
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}

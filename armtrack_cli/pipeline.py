@@ -12,13 +12,14 @@ from typing import Any
 
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.session import info as session_info
 from armtrack_cli.session.camera_yaml import write_camera_yaml
+from armtrack_cli.session.config import load_session
+from armtrack_cli.session.export_imu_csv import write_imu_csv
 from armtrack_cli.session.export_mcap import write_imu_mcap
 from armtrack_cli.session.export_qualisys import write_qtm_tsv
 from armtrack_cli.session.export_video import write_video
 from armtrack_cli.session.export_xsens import write_mt_manager
-from armtrack_cli.session import info as session_info
-from armtrack_cli.session.config import load_session
 from armtrack_cli.session.imu import read_imu
 from armtrack_cli.session.outputs import staged_folder, write_json, write_npz, write_text
 from armtrack_cli.session.qualisys import read_qualisys
@@ -116,10 +117,7 @@ def simulate(out: str | Path, settings: ArmSimSettings, *, imu_format: str = "xs
                              rate_hz=settings.imu_rate_hz, counter_start=int(settings.seed * 977) % 65536,
                              stf_start=(settings.seed * 1234567) % 2**32)
         elif imu_format == "csv":
-            rows = ["t,ax,ay,az,gx,gy,gz,qw,qx,qy,qz"] + [
-                ",".join(f"{v:.6f}" for v in (i["t"][k], *i["acc"][k], *i["gyr"][k], *i["quat"][k]))
-                for k in range(i["t"].size)]
-            write_text(tmp / imu_file, "\n".join(rows) + "\n")
+            write_imu_csv(tmp / imu_file, i["t"], i["acc"], i["gyr"], i["quat"])
         else:
             write_imu_mcap(tmp / imu_file, i["t"], i["acc"], i["gyr"], i["quat"])
         q = sim.qualisys
