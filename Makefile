@@ -19,7 +19,14 @@ setup: $(STAMP)
 demo: $(STAMP)
 	$(BIN)/armtrack info $(DEMO)
 	$(BIN)/armtrack info $(DEMO) --json --out $(DEMO_OUT) > /dev/null
+	$(BIN)/armtrack info sample_sessions/wrist-rom-01
 	@echo "demo: summary written to $(DEMO_OUT)/info.json"
+
+samples: $(STAMP)
+	$(BIN)/armtrack simulate sample_sessions/circle-01 --seed 1 --gt-gaps 2 --force
+	$(BIN)/armtrack simulate sample_sessions/reach-01 --task reach --seed 2 --duration 12 \
+		--drop-rate 0.01 --imu-format mcap --force
+	$(BIN)/armtrack simulate sample_sessions/wrist-rom-01 --task wrist-rom --seed 3 --duration 12 --force
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -p no:cacheprovider

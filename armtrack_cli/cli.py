@@ -76,8 +76,11 @@ def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | Non
 
 @main.command()
 @click.argument("out", type=click.Path(file_okay=False))
-@click.option("--task", type=click.Choice(["circle", "rectangle", "reach", "figure8"]),
-              default="circle", show_default=True, help="Rehabilitation task the wrist performs.")
+@click.option("--task", type=click.Choice(["circle", "rectangle", "reach", "figure8", "wrist-rom",
+                                           "reach-grasp"]),
+              default="circle", show_default=True,
+              help="Task: the first four are arm sessions (IMU + patch), wrist-rom and reach-grasp "
+              "palm-marker sessions with depth.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Random seed (same seed, "
               "same bytes).")
 @click.option("--duration", type=click.FloatRange(min=4.0, max=3600.0), default=20.0,
@@ -114,9 +117,10 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
              distractor, occlusions, no_distortion, undeclared_imu_offset, force, as_json,
              out_dir) -> None:
-    """Write a simulated arm session folder OUT (session.toml, video, IMU, Qualisys,
-    intrinsics) and its exact truth beside it as OUT.truth.npz."""
+    """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
+    Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
     from armtrack_cli.simulate.arm_session import ArmSimSettings
+    from armtrack_cli.simulate.palm_session import PalmSimSettings
 
     occ = []
     for spec in occlusions:
@@ -128,12 +132,17 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
         occ.append((start, dur))
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
-    settings = ArmSimSettings(
-        task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
-        imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
-        drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
-        distractor=distractor, occlusions=tuple(occ), distortion=not no_distortion,
-        declare_imu_offset=not undeclared_imu_offset)
+    if task in ("wrist-rom", "reach-grasp"):
+        settings = PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
+                                   qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
+                                   distortion=not no_distortion)
+    else:
+        settings = ArmSimSettings(
+            task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
+            imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
+            drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
+            distractor=distractor, occlusions=tuple(occ), distortion=not no_distortion,
+            declare_imu_offset=not undeclared_imu_offset)
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
     n_frames = int(round(duration * fps))
     with _progress(n_frames, "rendering", quiet=as_json) as bar:
@@ -142,9 +151,10 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     if as_json:
         click.echo(json.dumps(result, indent=2, sort_keys=True))
     else:
-        click.echo(f"wrote {result['session']} ({result['frames']} frames, "
-                   f"{result['imu_samples']} IMU samples, {result['qualisys_frames']} Qualisys "
-                   f"frames) and {result['truth']}")
+        extra = (f"{result['imu_samples']} IMU samples" if "imu_samples" in result else
+                 f"{result['depth_frames']} depth frames")
+        click.echo(f"wrote {result['session']} ({result['frames']} frames, {extra}, "
+                   f"{result['qualisys_frames']} Qualisys frames) and {result['truth']}")
 
 
 class _progress:

@@ -15,6 +15,7 @@ from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.session import info as session_info
 from armtrack_cli.session.camera_yaml import write_camera_yaml
 from armtrack_cli.session.config import load_session
+from armtrack_cli.session.depth import depth_path, write_depth_png
 from armtrack_cli.session.export_imu_csv import write_imu_csv
 from armtrack_cli.session.export_mcap import write_imu_mcap
 from armtrack_cli.session.export_qualisys import write_qtm_tsv
@@ -24,6 +25,7 @@ from armtrack_cli.session.imu import read_imu
 from armtrack_cli.session.outputs import staged_folder, write_json, write_npz, write_text
 from armtrack_cli.session.qualisys import read_qualisys
 from armtrack_cli.session.video import probe_video
+from armtrack_cli.simulate import palm_session
 from armtrack_cli.simulate.arm_session import ArmSimSettings, session_toml, simulate_arm
 
 VIDEO_EXT = (".mp4", ".avi", ".mkv", ".mov", ".m4v")
@@ -97,10 +99,15 @@ def simulate_command(name: str, settings: ArmSimSettings, imu_format: str) -> st
     return " ".join(parts)
 
 
-def simulate(out: str | Path, settings: ArmSimSettings, *, imu_format: str = "xsens",
+def simulate(out: str | Path, settings, *, imu_format: str = "xsens",
              force: bool = False, on_frame=None) -> dict[str, Any]:
-    """Write a simulated session folder OUT and its exact truth beside it (OUT.truth.npz)."""
+    """Write a simulated session folder OUT and its exact truth beside it (OUT.truth.npz).
+
+    ``settings`` is an ArmSimSettings (Tao & Hu arm sessions) or a PalmSimSettings (Cordella
+    palm-marker sessions with depth)."""
     out = Path(out)
+    if isinstance(settings, palm_session.PalmSimSettings):
+        return _simulate_palm(out, settings, force=force, on_frame=on_frame)
     sim = simulate_arm(settings)
     imu_file = IMU_FILES[imu_format]
     with staged_folder(out, force=force) as tmp:
@@ -127,4 +134,30 @@ def simulate(out: str | Path, settings: ArmSimSettings, *, imu_format: str = "xs
         write_npz(out.parent / f"{out.name}.truth.npz", sim.truth)
     return {"session": str(out), "truth": str(out.parent / f"{out.name}.truth.npz"),
             "frames": n, "imu_samples": int(i["t"].size), "qualisys_frames": int(q["t"].size),
+            "task": settings.task, "seed": settings.seed}
+
+
+def _simulate_palm(out: Path, settings, *, force: bool, on_frame) -> dict[str, Any]:
+    sim = palm_session.simulate_palm(settings)
+    cmd = f"armtrack simulate {out.name} --task {settings.task} --seed {settings.seed}" + (
+        f" --duration {settings.duration_s:g}" if settings.duration_s != 20.0 else "")
+    with staged_folder(out, force=force) as tmp:
+        write_text(tmp / "session.toml", palm_session.session_toml(settings, session_id=out.name,
+                                                                   command=cmd))
+        cam = sim.camera
+        write_camera_yaml(tmp / "intrinsics.yaml", CameraModel(cam.K, cam.dist, cam.width,
+                                                               cam.height))
+        q = sim.qualisys
+        write_qtm_tsv(tmp / "qualisys.tsv", q["xyz"], q["names"], settings.qualisys_hz)
+
+        def frames():
+            for i, img, depth in sim.frames():
+                write_depth_png(depth_path(tmp, i), depth)
+                yield i, img
+
+        n = write_video(tmp / "video.mp4", frames(), fps=settings.fps,
+                        size=(settings.width, settings.height), on_frame=on_frame)
+        write_npz(out.parent / f"{out.name}.truth.npz", sim.truth)
+    return {"session": str(out), "truth": str(out.parent / f"{out.name}.truth.npz"),
+            "frames": n, "depth_frames": n, "qualisys_frames": int(q["t"].size),
             "task": settings.task, "seed": settings.seed}

@@ -16,14 +16,13 @@ from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.simulate import imu_model, kinematics, render
 from armtrack_cli.simulate.camera import charuco_board, default_camera, project
+from armtrack_cli.simulate.capture import QTM_TO_WORLD, CameraNoise, qualisys_markers, to_world_toml
 
 BOARD = {"squares": (7, 5), "square_m": 0.04, "marker_m": 0.03, "dictionary": "DICT_4X4_50"}
 PATCH_BGR = (25, 35, 225)  # saturated red-orange
 PATCH_HSV = ((170, 140, 90), (10, 255, 255))  # wraps through red
 DISTRACTOR_W = np.array([0.50, 0.30, 0.0])
 QTM_NAMES = ["R_SHO", "R_ELB", "R_WRI"]
-QTM_TO_WORLD = np.array([[0.0, -1.0, 0.0, 0.62], [1.0, 0.0, 0.0, -0.31], [0.0, 0.0, 1.0, 0.0],
-                         [0.0, 0.0, 0.0, 1.0]])
 
 
 @dataclass(frozen=True)
@@ -69,16 +68,15 @@ class ArmSimulation:
     def frames(self) -> Iterator[tuple[int, np.ndarray]]:
         """(index, BGR image) of every video frame, rendered on demand."""
         s, tr = self.settings, self.truth
-        rng = np.random.default_rng([s.seed, 7])
-        noise = [rng.normal(0, 2.0, (s.height, s.width, 3)).astype(np.float32) for _ in range(6)]
+        camera_noise = CameraNoise(s.seed, s.height, s.width)
         for i in range(self.frame_t.size):
-            gain = 1.0 + 0.03 * np.sin(2 * np.pi * 0.7 * self.frame_t[i]) + rng.normal(0, 0.005)
+            gain, noise = camera_noise(self.frame_t[i])
             img, _ = render.draw_frame(
                 self.scene, shoulder=tr["frame_shoulder"][i], elbow=tr["frame_elbow"][i],
                 wrist=tr["frame_wrist"][i], q_WB=tr["frame_q_WB"][i],
                 forearm_unit_B=_axis_unit(s.forearm_axis),
                 distractor_W=DISTRACTOR_W if s.distractor else None,
-                occluder=bool(self.occluded[i]), gain=gain, noise=noise[rng.integers(6)])
+                occluder=bool(self.occluded[i]), gain=gain, noise=noise)
             yield i, img
 
 
@@ -125,12 +123,8 @@ def simulate_arm(s: ArmSimSettings) -> ArmSimulation:
     n_q = int(np.floor((s.duration_s - s.groundtruth_offset_s + 0.5) * s.qualisys_hz))
     tq = np.arange(n_q) / s.qualisys_hz
     qs = kinematics.arm_state(arm, task, tq + s.groundtruth_offset_s, s.forearm_axis)
-    xyz_w = np.stack([qs.shoulder, qs.elbow, qs.wrist], 1)
-    R, T = QTM_TO_WORLD[:3, :3], QTM_TO_WORLD[:3, 3]
-    xyz_q = (xyz_w - T) @ R + s.marker_noise_m * rng.standard_normal(xyz_w.shape)  # Rᵀ(X_W − T)
-    for _ in range(s.gt_gaps):
-        k, length = int(rng.integers(0, n_q - 50)), int(rng.uniform(0.1, 0.4) * s.qualisys_hz)
-        xyz_q[k:k + length, 2] = np.nan
+    xyz_q = qualisys_markers(np.stack([qs.shoulder, qs.elbow, qs.wrist], 1), s.marker_noise_m,
+                             s.gt_gaps, 2, s.qualisys_hz, rng)
     # --- scene and truth
     board = charuco_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
                           BOARD["dictionary"])
@@ -164,7 +158,6 @@ def simulate_arm(s: ArmSimSettings) -> ArmSimulation:
 
 def session_toml(s: ArmSimSettings, *, session_id: str, imu_file: str, command: str) -> str:
     """session.toml for a simulated arm session, in the contract's layout."""
-    tw = ",".join("[" + ",".join(f"{v:g}" for v in row) + "]" for row in QTM_TO_WORLD)
     imu_off = f"{s.imu_offset_s:g}" if s.declare_imu_offset else '"auto"'
     lo, hi = PATCH_HSV
     b = BOARD
@@ -182,6 +175,6 @@ def session_toml(s: ArmSimSettings, *, session_id: str, imu_file: str, command: 
         "", "[imu]", f'file = "{imu_file}"', f'forearm_axis = "{s.forearm_axis}"', "",
         "[groundtruth]", 'file = "qualisys.tsv"',
         'markers = { shoulder = "R_SHO", elbow = "R_ELB", wrist = "R_WRI" }',
-        f"to_world = [{tw}]", "",
+        f"to_world = {to_world_toml()}", "",
         "[sync]", f"imu_offset_s = {imu_off}", f"groundtruth_offset_s = {s.groundtruth_offset_s:g}",
         ""])

@@ -29,7 +29,8 @@ SLEEVE = np.array([140, 90, 60], float)
 class Scene:
     cam: CameraModel
     background: np.ndarray  # (H, W, 3) uint8, lens distortion applied
-    depth_m: np.ndarray  # (H, W) depth of the table along the optical axis, m (inf: none)
+    depth_m: np.ndarray  # (H, W) depth of the table along the optical axis, m (NaN: none)
+    rays_C: np.ndarray  # (H, W, 3) ray (x_n, y_n, 1) of every observed pixel
     patch_bgr: tuple[int, int, int]
     patch_side_m: float = 0.035
 
@@ -66,8 +67,9 @@ def build_scene(cam: CameraModel, board, square_m: float, patch_bgr, rng) -> Sce
     mx[~ok], my[~ok] = -1, -1
     bg = cv2.remap(tex, mx, my, cv2.INTER_LINEAR,
                    borderMode=cv2.BORDER_CONSTANT, borderValue=(60, 60, 60))
-    depth = np.where(ok, s, np.inf)  # rays are (x_n, y_n, 1): s is z_C itself
-    return Scene(cam, bg, depth, tuple(int(c) for c in patch_bgr))
+    # the ray in W is R_WCᵀ (x_n, y_n, 1): its scale s to the table is the depth z_C itself
+    depth = np.where(ok, s, np.nan)
+    return Scene(cam, bg, depth, rays, tuple(int(c) for c in patch_bgr))
 
 
 def _poly(img, pts_px: np.ndarray, colour) -> None:
@@ -75,15 +77,20 @@ def _poly(img, pts_px: np.ndarray, colour) -> None:
                        tuple(float(c) for c in colour), cv2.LINE_AA, SHIFT)
 
 
-def _limb(img, cam, a: np.ndarray, b: np.ndarray, radius: float, colour: np.ndarray) -> None:
-    """A shaded cylinder from a to b (W), drawn as nested quads, darker at the rim."""
+SHADES = ((1.0, 0.62), (0.75, 0.8), (0.45, 0.95))  # (radius fraction, brightness), rim to core
+
+
+def _limb(img, cam, a: np.ndarray, b: np.ndarray, radius: float, colour: np.ndarray,
+          shades=SHADES) -> None:
+    """A shaded cylinder from a to b (W), drawn as nested quads, darker at the rim
+    (``shades=((1.0, 1.0),)`` paints it flat, e.g. into a label image)."""
     (pa, pb), (za, zb) = project(cam, np.stack([a, b]))
     if min(za, zb) <= 0.05:
         return
     d = pb - pa
     n = np.array([-d[1], d[0]]) / max(np.linalg.norm(d), 1e-6)
     f = cam.K[0, 0]
-    for frac, shade in ((1.0, 0.62), (0.75, 0.8), (0.45, 0.95)):
+    for frac, shade in shades:
         ra, rb = f * radius * frac / za, f * radius * frac / zb
         quad = np.array([pa + n * ra, pb + n * rb, pb - n * rb, pa - n * ra])
         _poly(img, quad, colour * shade)

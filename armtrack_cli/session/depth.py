@@ -1,0 +1,43 @@
+"""RGB-D depth frames: depth/NNNNNN.png, 16-bit, millimetres along the optical axis,
+0 = no reading (SESSION_FORMAT.md). In armtrack: metres, NaN = no reading."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from armtrack_cli.core.errors import DataError
+from armtrack_cli.session.outputs import atomic_write
+
+MAX_MM = 65535
+
+
+def depth_path(folder: str | Path, frame: int) -> Path:
+    return Path(folder) / "depth" / f"{frame:06d}.png"
+
+
+def write_depth_png(path: str | Path, depth_m: np.ndarray) -> Path:
+    mm = np.where(np.isfinite(depth_m), np.round(depth_m * 1000.0), 0)
+    img = np.clip(mm, 0, MAX_MM).astype(np.uint16)
+
+    def write(tmp: Path) -> None:
+        if not cv2.imwrite(str(tmp), img, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
+            raise DataError(path, "OpenCV could not write the PNG")
+
+    return atomic_write(path, write)
+
+
+def read_depth_png(path: str | Path) -> np.ndarray:
+    """(H, W) depth in metres, NaN where the sensor gave no reading."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(path, "not found", "depth frames are depth/000000.png, depth/000001.png, …")
+    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise DataError(path, "is not an image OpenCV can read")
+    if img.dtype != np.uint16 or img.ndim != 2:
+        raise DataError(path, f"is {img.dtype} with {1 if img.ndim == 2 else img.shape[2]} "
+                        "channel(s); depth frames are single-channel 16-bit PNG in mm")
+    return np.where(img > 0, img.astype(float) / 1000.0, np.nan)
