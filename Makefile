@@ -18,9 +18,12 @@ setup: $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/armtrack info $(DEMO)
-	$(BIN)/armtrack info $(DEMO) --json --out $(DEMO_OUT) > /dev/null
+	$(BIN)/armtrack calibrate $(DEMO) --out $(DEMO_OUT)/circle-01
+	$(BIN)/armtrack detect $(DEMO) --out $(DEMO_OUT)/circle-01
 	$(BIN)/armtrack info sample_sessions/wrist-rom-01
-	@echo "demo: summary written to $(DEMO_OUT)/info.json"
+	$(BIN)/armtrack calibrate sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01
+	$(BIN)/armtrack detect sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01
+	@echo "demo: outputs in $(DEMO_OUT)/"
 
 samples: $(STAMP)
 	$(BIN)/armtrack simulate sample_sessions/circle-01 --seed 1 --gt-gaps 2 --force
@@ -35,7 +38,7 @@ lint: $(STAMP)
 	$(BIN)/ruff check armtrack_cli tests
 
 bench: $(STAMP)
-	$(BIN)/python -m pytest -q -p no:cacheprovider benchmarks --benchmark-only
+	$(BIN)/python benchmarks/run.py
 
 docs: $(STAMP)
 	$(BIN)/python -c "from armtrack_cli.cli import render_reference as r; open('docs/cli.md','w').write(r())"

@@ -12,6 +12,7 @@ import sys
 import traceback
 
 import click
+import numpy as np
 
 from armtrack_cli import __version__, pipeline
 from armtrack_cli.core.errors import ArmtrackError
@@ -42,6 +43,32 @@ class _Group(click.Group):
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 out_option = click.option("--out", "out_dir", type=click.Path(file_okay=False),
                           help="Write outputs here instead of SESSION/armtrack/.")
+recipe_option = click.option("--recipe", help="Recipe name in recipes/ (e.g. default) or a TOML "
+                             "path; settings resolve as defaults < recipe < --set.")
+set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+                          help="Override one recipe setting, e.g. detect.patch.move_px=15 "
+                          "(repeatable).")
+json_option = click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
+
+
+def _emit(result: dict, as_json: bool, lines: list[str]) -> None:
+    if as_json:
+        click.echo(json.dumps(result, indent=2, sort_keys=True))
+    else:
+        click.echo("\n".join(lines))
+
+
+def _parse_pixels(spec: str) -> np.ndarray:
+    """'u1,v1;u2,v2;…' -> (k, 2) array."""
+    try:
+        pts = [tuple(float(x) for x in p.split(",")) for p in spec.replace(" ", "").split(";") if p]
+        arr = np.array(pts, float)
+        if arr.ndim != 2 or arr.shape[1] != 2:
+            raise ValueError
+        return arr
+    except ValueError:
+        raise click.BadParameter(f"{spec!r} is not 'u,v;u,v;…' in the [palm] markers order",
+                                 param_hint="--markers") from None
 
 
 @click.group(cls=_Group, context_settings=CONTEXT)
@@ -72,6 +99,85 @@ def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | Non
         click.echo(json.dumps(result, indent=2, sort_keys=True))
     else:
         click.echo(pipeline.format_info(result))
+
+
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("--frame", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Video frame in which the board lies on the table (and the hand is neutral).")
+@click.option("--markers", "markers", help="Palm sessions: the six markers' pixels 'u,v;u,v;…' in "
+              "the [palm] markers order, when automatic labelling is unsure.")
+@recipe_option
+@set_option
+@json_option
+@out_option
+def calibrate(sessions, frame, markers, recipe, sets, as_json, out_dir) -> None:
+    """The camera's pose in W from the ChArUco board in frame N (intrinsics from
+    intrinsics.yaml or from board images in calib/), written to camera.yaml; for palm sessions
+    also the palm model (palm.toml)."""
+    px = _parse_pixels(markers) if markers else None
+    for folder in _expand(sessions):
+        r = pipeline.calibrate(folder, frame=frame, markers_px=px, out=_out_for(out_dir, folder,
+                                                                               sessions),
+                               recipe=recipe, sets=sets)
+        lines = [f"{folder}: board in frame {r['frame']}: {r['corners']} corners, reprojection "
+                 f"error {r['reprojection_error_px']:.3f} px",
+                 f"  camera at {r['camera_position_m']} m in W -> {r['camera_yaml']}"]
+        if "intrinsics_rms_px" in r:
+            lines.insert(0, f"{folder}: intrinsics from {r['views_used']} board images, RMS "
+                         f"{r['intrinsics_rms_px']:.3f} px")
+        if "palm_toml" in r:
+            lines.append(f"  palm model -> {r['palm_toml']} (link residuals "
+                         f"{r['palm_link_residual_cm']} cm)")
+        _emit(r, as_json, lines)
+
+
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@recipe_option
+@set_option
+@json_option
+@out_option
+def detect(sessions, recipe, sets, as_json, out_dir) -> None:
+    """The wrist patch in every frame (CamShift), or every palm-marker candidate blob,
+    written to detections.csv."""
+    for folder in _expand(sessions):
+        from armtrack_cli.session.config import load_session
+        from armtrack_cli.session.video import probe_video
+
+        n = probe_video(load_session(folder).camera.video).n_frames if not as_json else 0
+        with _progress(n, f"detect {os.path.basename(str(folder).rstrip('/'))}",
+                       quiet=as_json) as bar:
+            r = pipeline.detect(folder, out=_out_for(out_dir, folder, sessions), recipe=recipe,
+                                sets=sets, on_frame=bar)
+        if r["kind"] == "patch":
+            line = (f"{folder}: patch found in {r['ok_frames']} of {r['frames']} frames, "
+                    f"{r['lost_spans']} losses (longest {r['longest_loss_s']} s)")
+        else:
+            line = f"{folder}: {r['blobs']} candidate blobs in {r['frames']} frames"
+        _emit(r, as_json, [line + f", {r['frames_per_s']:.0f} frames/s -> {r['detections']}"])
+
+
+def _expand(items) -> list[str]:
+    """Session folders: each argument, or the session folders inside a folder of sessions."""
+    out = []
+    for item in items:
+        if os.path.isdir(item) and not os.path.exists(os.path.join(item, "session.toml")):
+            subs = sorted(os.path.join(item, d) for d in os.listdir(item)
+                          if os.path.isfile(os.path.join(item, d, "session.toml")))
+            out.extend(subs or [item])
+        else:
+            out.append(item)
+    return out
+
+
+def _out_for(out_dir, folder, sessions) -> str | None:
+    """--out DIR: that folder for one session; DIR/SESSION_NAME for several."""
+    if out_dir is None:
+        return None
+    if len(_expand(sessions)) == 1:
+        return out_dir
+    return os.path.join(out_dir, os.path.basename(str(folder).rstrip("/")))
 
 
 @main.command()
@@ -108,6 +214,8 @@ def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | Non
 @click.option("--occlusion", "occlusions", multiple=True, metavar="START:DURATION",
               help="A card hides the patch from START for DURATION seconds (repeatable).")
 @click.option("--no-distortion", is_flag=True, help="An ideal pinhole lens.")
+@click.option("--calib-images", type=click.IntRange(0, 60), default=0, show_default=True,
+              help="Also film the board from N angles into calib/ (intrinsics = \"calib/\").")
 @click.option("--undeclared-imu-offset", is_flag=True,
               help="Write imu_offset_s = \"auto\" (the truth file keeps the real offset).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
@@ -115,8 +223,8 @@ def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | Non
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
-             distractor, occlusions, no_distortion, undeclared_imu_offset, force, as_json,
-             out_dir) -> None:
+             distractor, occlusions, no_distortion, calib_images, undeclared_imu_offset, force,
+             as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
     from armtrack_cli.simulate.arm_session import ArmSimSettings
@@ -135,14 +243,14 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     if task in ("wrist-rom", "reach-grasp"):
         settings = PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
                                    qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
-                                   distortion=not no_distortion)
+                                   distortion=not no_distortion, calib_images=calib_images)
     else:
         settings = ArmSimSettings(
             task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
             imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
             drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
             distractor=distractor, occlusions=tuple(occ), distortion=not no_distortion,
-            declare_imu_offset=not undeclared_imu_offset)
+            declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images)
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
     n_frames = int(round(duration * fps))
     with _progress(n_frames, "rendering", quiet=as_json) as bar:

@@ -47,5 +47,9 @@ class GroundTruthError(DataError):
     """A Qualisys export is malformed or does not hold the markers asked for."""
 
 
+class CalibrationError(DataError):
+    """The board or the palm markers cannot be found or fitted well enough."""
+
+
 class OutputError(ArmtrackError):
     """An output could not be written."""

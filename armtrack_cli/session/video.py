@@ -162,3 +162,54 @@ def _iter_mcap(video: VideoStream) -> Iterator[tuple[int, float, np.ndarray]]:
         if img is None:
             raise VideoError(video.path, f"topic {video.topic}: image {i} cannot be decoded")
         yield i, float(video.t[i]), img
+
+
+def read_frame(video: VideoStream, index: int) -> np.ndarray:
+    """One frame by index (decodes from the start: for the first frames of a session)."""
+    if not 0 <= index < video.n_frames:
+        raise VideoError(video.path, f"has {video.n_frames} frames; frame {index} does not exist",
+                         f"use --frame between 0 and {video.n_frames - 1}")
+    for i, _, img in iter_frames(video):
+        if i == index:
+            return img
+    raise VideoError(video.path, f"frame {index} cannot be decoded")
+
+
+def iter_frames_ahead(video: VideoStream, depth: int = 16) -> Iterator[tuple[int, float, np.ndarray]]:
+    """iter_frames with decoding on a second thread, so decoding and detection overlap
+    (OpenCV releases the GIL while it decodes and while it filters)."""
+    import queue
+    import threading
+
+    q: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+    done = object()
+
+    def produce() -> None:
+        try:
+            for item in iter_frames(video):
+                if stop.is_set():
+                    return
+                q.put(item)
+        except BaseException as exc:  # handed to the consumer
+            q.put(exc)
+            return
+        q.put(done)
+
+    th = threading.Thread(target=produce, daemon=True)
+    th.start()
+    try:
+        while True:
+            item = q.get()
+            if item is done:
+                break
+            if isinstance(item, BaseException):
+                raise item
+            yield item
+    finally:
+        stop.set()
+        while th.is_alive():
+            try:
+                q.get_nowait()
+            except queue.Empty:
+                th.join(0.01)

@@ -47,6 +47,7 @@ class ArmSimSettings:
     imu_offset_s: float = -1.0  # session time = IMU time + offset
     groundtruth_offset_s: float = -1.5
     declare_imu_offset: bool = True  # False writes imu_offset_s = "auto" (truth keeps the value)
+    calib_images: int = 0  # board images for intrinsic calibration (calib/); 0: intrinsics.yaml
     shoulder: tuple[float, float, float] = (0.12, 0.58, 0.30)
     upper_arm_m: float = 0.31
     forearm_m: float = 0.27
@@ -167,7 +168,8 @@ def session_toml(s: ArmSimSettings, *, session_id: str, imu_file: str, command: 
         f'task = "{s.task}"', 'side = "right"', "",
         "[arm]", f"upper_arm_m = {s.upper_arm_m:g}", f"forearm_m = {s.forearm_m:g}",
         "shoulder_m = [" + ", ".join(f"{v:g}" for v in s.shoulder) + "]", "",
-        "[camera]", 'video = "video.mp4"', 'intrinsics = "intrinsics.yaml"',
+        "[camera]", 'video = "video.mp4"',
+        'intrinsics = "calib/"' if s.calib_images else 'intrinsics = "intrinsics.yaml"',
         f'board = {{ type = "charuco", squares = [{b["squares"][0]}, {b["squares"][1]}], '
         f'square_m = {b["square_m"]:g}, marker_m = {b["marker_m"]:g}, '
         f'dictionary = "{b["dictionary"]}" }}',

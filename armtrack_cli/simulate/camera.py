@@ -25,7 +25,7 @@ def look_at(eye: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 def default_camera(*, width: int = 640, height: int = 480, focal_px: float = 560.0,
                    k1: float = -0.12, k2: float = 0.03,
-                   eye=(0.22, -0.40, 0.66), target=(0.22, 0.14, 0.04)) -> CameraModel:
+                   eye=(0.22, -0.40, 0.66), target=(0.22, 0.09, 0.04)) -> CameraModel:
     K = np.array([[focal_px, 0, width / 2 - 0.5 + 3.2], [0, focal_px, height / 2 - 0.5 - 2.1],
                   [0, 0, 1.0]])
     R, T = look_at(np.asarray(eye, float), np.asarray(target, float))

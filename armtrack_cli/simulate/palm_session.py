@@ -36,6 +36,7 @@ class PalmSimSettings:
     clutter: bool = True
     hide: tuple[tuple[int, float, float], ...] = ()  # (marker index, start s, duration s)
     groundtruth_offset_s: float = -1.5
+    calib_images: int = 0  # board images for intrinsic calibration (calib/); 0: intrinsics.yaml
 
 
 @dataclass(frozen=True)
@@ -122,7 +123,8 @@ def session_toml(s: PalmSimSettings, *, session_id: str, command: str) -> str:
         f"# simulated by: {command}",
         "[session]", f'id = "{session_id}"', 'subject = "SIM"', "recorded = 2026-11-20T10:15:00",
         f'task = "{s.task}"', 'side = "right"', "",
-        "[camera]", 'video = "video.mp4"', 'intrinsics = "intrinsics.yaml"',
+        "[camera]", 'video = "video.mp4"',
+        'intrinsics = "calib/"' if s.calib_images else 'intrinsics = "intrinsics.yaml"',
         f'board = {{ type = "charuco", squares = [{b["squares"][0]}, {b["squares"][1]}], '
         f'square_m = {b["square_m"]:g}, marker_m = {b["marker_m"]:g}, '
         f'dictionary = "{b["dictionary"]}" }}', "",

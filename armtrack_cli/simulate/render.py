@@ -36,13 +36,14 @@ class Scene:
 
 
 def table_texture(board_img: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """A wood-like table at TEX_MM per pixel with the board placed at W's origin (y_W ≤ 0)."""
+    """A light grey laminate table (as in many clinics; a wooden one would be skin-coloured)
+    at TEX_MM per pixel, with the board placed at W's origin (y_W ≤ 0)."""
     h = int(round((TEX_Y[1] - TEX_Y[0]) * 1000 / TEX_MM))
     w = int(round((TEX_X[1] - TEX_X[0]) * 1000 / TEX_MM))
     grain = cv2.GaussianBlur(rng.standard_normal((h, w // 8)).astype(np.float32), (0, 0), 3)
     grain = cv2.resize(grain, (w, h), interpolation=cv2.INTER_LINEAR)
-    base = np.array([95, 140, 175], np.float32)  # light wood, BGR
-    tex = np.clip(base[None, None, :] * (1 + 0.06 * grain[..., None]), 0, 255).astype(np.uint8)
+    base = np.array([168, 163, 155], np.float32)  # light grey laminate, BGR
+    tex = np.clip(base[None, None, :] * (1 + 0.04 * grain[..., None]), 0, 255).astype(np.uint8)
     bh, bw = board_img.shape[:2]
     r0 = int(round((-bh * TEX_MM / 1000 - TEX_Y[0]) * 1000 / TEX_MM))  # board spans y_W ∈ [-h, 0]
     c0 = int(round((0 - TEX_X[0]) * 1000 / TEX_MM))
@@ -62,8 +63,9 @@ def build_scene(cam: CameraModel, board, square_m: float, patch_bgr, rng) -> Sce
     s = -eye[2] / d_W[..., 2]  # hit the table plane z = 0
     hit = eye + s[..., None] * d_W
     ok = (s > 0) & np.isfinite(s)
-    mx = ((hit[..., 0] - TEX_X[0]) * 1000 / TEX_MM).astype(np.float32)
-    my = ((hit[..., 1] - TEX_Y[0]) * 1000 / TEX_MM).astype(np.float32)
+    # texel k covers [k, k+1) mm from the texture's edge; remap samples texel centres at integers
+    mx = ((hit[..., 0] - TEX_X[0]) * 1000 / TEX_MM - 0.5).astype(np.float32)
+    my = ((hit[..., 1] - TEX_Y[0]) * 1000 / TEX_MM - 0.5).astype(np.float32)
     mx[~ok], my[~ok] = -1, -1
     bg = cv2.remap(tex, mx, my, cv2.INTER_LINEAR,
                    borderMode=cv2.BORDER_CONSTANT, borderValue=(60, 60, 60))

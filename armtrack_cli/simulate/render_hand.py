@@ -63,17 +63,18 @@ def draw_hand(scene: Scene, *, wrist, q_WH, q_WF, palm_H, clutter_W=None, hidden
     out = cv2.GaussianBlur(img.astype(np.float32) * gain, (3, 3), 0.6)
     if noise is not None:
         out += noise
-    depth = _depth(scene, label, wrist, normal, elbow_side, rng)
+    depth = _depth(scene, label, wrist, normal, rng)
     return np.clip(out, 0, 255).astype(np.uint8), visible, depth
 
 
-def _depth(scene: Scene, label, wrist, normal, elbow_side, rng):
-    """Depth along the optical axis (m): the table, the palm plane over the hand, the forearm
-    plane over the forearm; structured-light holes along the hand's outline, 1 mm noise on it."""
+def _depth(scene: Scene, label, wrist, normal, rng):
+    """Depth along the optical axis (m): the table, the palm plane over the hand, a level plane
+    through the wrist over the forearm (continuous at the wrist, as skin is); structured-light
+    holes along the outline, 1 mm noise on the body."""
     cam = scene.cam
     depth = scene.depth_m.copy()
     rays = scene.rays_C
-    for lab, point, n in ((1, elbow_side, np.array([0, 0, 1.0])), (2, wrist, normal)):
+    for lab, point, n in ((1, wrist, np.array([0, 0, 1.0])), (2, wrist, normal)):
         m = label == lab
         if not m.any():
             continue

@@ -1,76 +1,41 @@
-"""The data flow on one screen: session -> calibrate -> detect -> fuse -> compare -> report.
-
-Each stage is a function of arrays; this module reads its inputs through ``session`` (the
-I/O layer), calls the stage and writes its outputs atomically into SESSION/armtrack/ (or
---out). Stages exchange files, so each can be run alone.
-"""
+"""Simulated sessions written to disk: the session folder and its truth beside it."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
-from armtrack_cli.core.errors import DataError
+import numpy as np
+
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.session import info as session_info
 from armtrack_cli.session.camera_yaml import write_camera_yaml
-from armtrack_cli.session.config import load_session
 from armtrack_cli.session.depth import depth_path, write_depth_png
 from armtrack_cli.session.export_imu_csv import write_imu_csv
 from armtrack_cli.session.export_mcap import write_imu_mcap
 from armtrack_cli.session.export_qualisys import write_qtm_tsv
 from armtrack_cli.session.export_video import write_video
 from armtrack_cli.session.export_xsens import write_mt_manager
-from armtrack_cli.session.imu import read_imu
-from armtrack_cli.session.outputs import staged_folder, write_json, write_npz, write_text
-from armtrack_cli.session.qualisys import read_qualisys
-from armtrack_cli.session.video import probe_video
+from armtrack_cli.session.images import write_image
+from armtrack_cli.session.outputs import staged_folder, write_npz, write_text
 from armtrack_cli.simulate import palm_session
-from armtrack_cli.simulate.arm_session import ArmSimSettings, session_toml, simulate_arm
-
-VIDEO_EXT = (".mp4", ".avi", ".mkv", ".mov", ".m4v")
-
-
-def info(path: str | Path, *, imu_rate_hz: float | None = None,
-         out_dir: str | Path | None = None) -> dict[str, Any]:
-    """Stage 0: what a session folder (or a single recorded file) holds."""
-    path = Path(path)
-    if path.is_dir():
-        result = session_info.describe(load_session(path), imu_rate_hz=imu_rate_hz)
-    elif path.is_file():
-        result = _info_file(path, imu_rate_hz)
-    else:
-        raise DataError(path, "not found", "give a session folder or a recorded file")
-    if out_dir is not None:
-        write_json(Path(out_dir) / "info.json", result)
-    return result
-
-
-def _info_file(path: Path, imu_rate_hz: float | None) -> dict[str, Any]:
-    """A lone file: a Qualisys TSV, a video, or an IMU export (told apart by content)."""
-    out: dict[str, Any] = {"session": {"folder": str(path.parent), "id": path.name, "subject": None,
-                                       "task": None, "side": "right", "kind": "file",
-                                       "recorded": None}, "methods": {}}
-    suffix = path.suffix.lower()
-    if suffix == ".tsv":
-        out["groundtruth"] = session_info.describe_markers(read_qualisys(path), 0.0)
-    elif suffix in VIDEO_EXT:
-        v = probe_video(path)
-        out["video"] = {"file": v.path, "source": v.source, "frames": v.n_frames, "fps": v.fps,
-                        "width": v.width, "height": v.height,
-                        "duration_s": round(float(v.t[-1]), 4), "span_s": [0.0, float(v.t[-1])],
-                        "times_from": v.timestamps_from}
-    else:
-        s = read_imu(path, rate_hz=imu_rate_hz)
-        out["imu"] = session_info.describe_imu(s, 0.0)
-        out["imu"]["forearm_axis"] = "+y"
-    return out
-
-
-format_info = session_info.format_text
-
+from armtrack_cli.simulate.arm_session import BOARD, ArmSimSettings, session_toml, simulate_arm
+from armtrack_cli.simulate.calib_images import board_images
+from armtrack_cli.simulate.camera import charuco_board
 
 IMU_FILES = {"xsens": "imu.txt", "csv": "imu.csv", "mcap": "imu.mcap"}
+
+
+def _write_intrinsics(folder: Path, cam: CameraModel, settings) -> None:
+    """intrinsics.yaml with the true camera, or calib/ board images to compute it from."""
+    if not settings.calib_images:
+        write_camera_yaml(folder / "intrinsics.yaml", CameraModel(cam.K, cam.dist, cam.width,
+                                                                  cam.height))
+        return
+    board = charuco_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
+                          BOARD["dictionary"])
+    rng = np.random.default_rng([settings.seed, 23])
+    for k, img in enumerate(board_images(cam, board, settings.calib_images, rng)):
+        write_image(folder / "calib" / f"{k:03d}.png", img)
 
 
 def simulate_command(name: str, settings: ArmSimSettings, imu_format: str) -> str:
@@ -86,6 +51,8 @@ def simulate_command(name: str, settings: ArmSimSettings, imu_format: str) -> st
                 getattr(settings, key), float) else f"{flag} {getattr(settings, key)}")
     if imu_format != "xsens":
         parts.append(f"--imu-format {imu_format}")
+    if settings.calib_images:
+        parts.append(f"--calib-images {settings.calib_images}")
     if settings.qualisys_hz != default.qualisys_hz:
         parts.append(f"--qualisys-hz {settings.qualisys_hz:g}")
     for k, v in sorted(settings.imu_errors.items()):
@@ -115,9 +82,7 @@ def simulate(out: str | Path, settings, *, imu_format: str = "xsens",
                                                       imu_file=imu_file,
                                                       command=simulate_command(out.name, settings,
                                                                                imu_format)))
-        cam = sim.camera
-        write_camera_yaml(tmp / "intrinsics.yaml", CameraModel(cam.K, cam.dist, cam.width,
-                                                               cam.height))
+        _write_intrinsics(tmp, sim.camera, settings)
         i = sim.imu
         if imu_format == "xsens":
             write_mt_manager(tmp / imu_file, i["t"], i["acc"], i["gyr"], i["quat"],
@@ -140,13 +105,12 @@ def simulate(out: str | Path, settings, *, imu_format: str = "xsens",
 def _simulate_palm(out: Path, settings, *, force: bool, on_frame) -> dict[str, Any]:
     sim = palm_session.simulate_palm(settings)
     cmd = f"armtrack simulate {out.name} --task {settings.task} --seed {settings.seed}" + (
-        f" --duration {settings.duration_s:g}" if settings.duration_s != 20.0 else "")
+        f" --duration {settings.duration_s:g}" if settings.duration_s != 20.0 else "") + (
+        f" --calib-images {settings.calib_images}" if settings.calib_images else "")
     with staged_folder(out, force=force) as tmp:
         write_text(tmp / "session.toml", palm_session.session_toml(settings, session_id=out.name,
                                                                    command=cmd))
-        cam = sim.camera
-        write_camera_yaml(tmp / "intrinsics.yaml", CameraModel(cam.K, cam.dist, cam.width,
-                                                               cam.height))
+        _write_intrinsics(tmp, sim.camera, settings)
         q = sim.qualisys
         write_qtm_tsv(tmp / "qualisys.tsv", q["xyz"], q["names"], settings.qualisys_hz)
 

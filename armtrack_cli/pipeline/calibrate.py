@@ -1,0 +1,150 @@
+"""`armtrack calibrate`: intrinsics (intrinsics.yaml or calib/ images), the camera's pose in W
+from the board in frame N, and for palm sessions the user-specific palm model."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from armtrack_cli.calibrate.board_pose import MIN_CORNERS, board_pose, make_board
+from armtrack_cli.calibrate.intrinsics import calibrate_intrinsics
+from armtrack_cli.calibrate.palm_model import PalmFit, label_palm
+from armtrack_cli.core.errors import CalibrationError
+from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.detect.palm_blobs import PalmBlobDetector
+from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.session.camera_yaml import read_camera_yaml, write_camera_yaml
+from armtrack_cli.session.config import Session, load_session, require
+from armtrack_cli.session.depth import depth_path, read_depth_png
+from armtrack_cli.session.images import read_images
+from armtrack_cli.session.outputs import write_text
+from armtrack_cli.session.recipe import section
+from armtrack_cli.session.video import probe_video, read_frame
+
+HAND_HEIGHT_M = 0.035  # back of a hand lying flat, above the table, when there is no depth
+
+
+@dataclass(frozen=True)
+class CalibrateSettings:
+    max_error_px: float = 2.0  # board reprojection error above this is refused
+
+
+def _intrinsics(session: Session) -> tuple[CameraModel, dict[str, Any]]:
+    src = session.camera.intrinsics
+    if not src.is_dir():
+        return read_camera_yaml(src), {"intrinsics": str(src)}
+    b = session.camera.board
+    images = read_images(src)
+    fit = calibrate_intrinsics([img for _, img in images], make_board(
+        b.squares, b.square_m, b.marker_m, b.dictionary))
+    if fit is None:
+        raise CalibrationError(src, f"fewer than 4 of its {len(images)} images show at least 8 "
+                               "board corners", "film the board whole, from 10-25 angles")
+    return fit.camera, {"intrinsics": str(src), "intrinsics_rms_px": round(fit.rms_px, 4),
+                        "views_used": fit.views_used,
+                        "views_rejected": [images[k][0].name for k in fit.views_rejected]}
+
+
+def lift_pixels(cam: CameraModel, px: np.ndarray, depth: np.ndarray | None) -> np.ndarray:
+    """(k, 3) points in W under pixels: from the depth frame (median of a 5x5 window), else
+    on the plane of the back of a hand lying on the table."""
+    n = cv2.undistortPoints(px.reshape(-1, 1, 2).astype(np.float64), cam.K, cam.dist).reshape(-1, 2)
+    rays = np.c_[n, np.ones(len(n))]
+    eye = -cam.R_WC.T @ cam.T_WC
+    out = np.empty((len(px), 3))
+    for i, (r, (u, v)) in enumerate(zip(rays, px)):
+        z = np.nan
+        if depth is not None:
+            y0, x0 = int(round(v)), int(round(u))
+            win = depth[max(0, y0 - 2):y0 + 3, max(0, x0 - 2):x0 + 3]
+            z = np.nanmedian(win) if np.isfinite(win).any() else np.nan
+        if np.isfinite(z):
+            out[i] = cam.R_WC.T @ (z * r - cam.T_WC)
+        else:
+            d = cam.R_WC.T @ r
+            out[i] = eye + (HAND_HEIGHT_M - eye[2]) / d[2] * d
+    return out
+
+
+def _palm(session: Session, cam: CameraModel, image: np.ndarray, frame: int,
+          markers_px: np.ndarray | None) -> tuple[PalmFit, np.ndarray]:
+    p = session.palm
+    if markers_px is None:
+        blobs = PalmBlobDetector(p.colour.low, p.colour.high).detect(image)
+        px = blobs[:, :2]
+        if len(px) < len(p.markers):
+            raise CalibrationError(session.camera.video, f"frame {frame}: {len(px)} marker blobs "
+                                   f"found, {len(p.markers)} needed",
+                                   "give their pixels with --markers, or try another --frame")
+    else:
+        px = markers_px
+    dpath = depth_path(session.root, frame)
+    depth = read_depth_png(dpath) if dpath.exists() else None
+    pts = lift_pixels(cam, px, depth)
+    eye = -cam.R_WC.T @ cam.T_WC
+    fit = label_palm(pts, p.markers, p.link_m, side=session.meta.side, camera_W=eye)
+    if fit is None or np.abs(fit.link_residual_m).max() > 0.02:
+        worst = "" if fit is None else f" (a link is off by {np.abs(fit.link_residual_m).max() * 100:.1f} cm)"
+        raise CalibrationError(session.camera.video, f"frame {frame}: the blobs do not fit the palm "
+                               f"model of [palm] link_m{worst}",
+                               "check link_m, or give the markers' pixels with --markers")
+    return fit, px[fit.blob_index]
+
+
+def _palm_toml(session: Session, fit: PalmFit, px: np.ndarray, frame: int, depth: bool) -> str:
+    fmt = lambda v: "[" + ", ".join(f"{x:.6f}" for x in v) + "]"  # noqa: E731
+    return "\n".join([
+        f"# palm model measured by armtrack calibrate on frame {frame} "
+        f"({'with' if depth else 'without'} depth)",
+        "[palm]", f'side = "{session.meta.side}"',
+        "markers = [" + ", ".join(f'"{m}"' for m in fit.names) + "]",
+        "link_m = " + fmt(session.palm.link_m) + "   # as measured (session.toml)",
+        "angle_deg = " + fmt(fit.angle_deg) + "   # in-plane angle from x_H, from the frame",
+        "position_m = [" + ", ".join(fmt(p) for p in fit.position_H) + "]   # each marker in H",
+        "", "[fit]", f"frame = {frame}",
+        "pixels = [" + ", ".join(fmt(p) for p in px) + "]",
+        "link_residual_m = " + fmt(fit.link_residual_m), ""])
+
+
+def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None = None,
+              out: str | Path | None = None, recipe: str | None = None,
+              sets: tuple[str, ...] = ()) -> dict[str, Any]:
+    session = load_session(path)
+    require(session, "camera", "video", "intrinsics", "board")
+    doc, where = resolve_recipe(recipe, sets)
+    settings = section(doc, "calibrate", CalibrateSettings, where)
+    cam, info = _intrinsics(session)
+    video = probe_video(session.camera.video)
+    if (video.width, video.height) != (cam.width, cam.height):
+        raise CalibrationError(session.camera.intrinsics, f"is for {cam.width}x{cam.height} images "
+                               f"but the video is {video.width}x{video.height}")
+    image = read_frame(video, frame)
+    b = session.camera.board
+    pose = board_pose(image, make_board(b.squares, b.square_m, b.marker_m, b.dictionary), cam)
+    if pose is None:
+        raise CalibrationError(video.path, f"frame {frame}: no ChArUco board found",
+                               "try another --frame where the board lies whole and unoccluded")
+    if pose.n_corners < MIN_CORNERS:
+        raise CalibrationError(video.path, f"frame {frame}: only {pose.n_corners} board corners "
+                               f"found, {MIN_CORNERS} needed", "try another --frame")
+    if pose.rms_px > settings.max_error_px:
+        raise CalibrationError(video.path, f"frame {frame}: board reprojection error "
+                               f"{pose.rms_px:.2f} px is above {settings.max_error_px} px",
+                               "check the intrinsics and the board sizes, or try another --frame")
+    cam = CameraModel(cam.K, cam.dist, cam.width, cam.height, pose.R_WC, pose.T_WC, pose.rms_px)
+    dest = out_dir(session, out)
+    result = {"camera_yaml": str(dest / "camera.yaml"), "frame": frame,
+              "reprojection_error_px": round(pose.rms_px, 4), "corners": pose.n_corners,
+              "camera_position_m": [round(float(v), 4) for v in pose.camera_position_W], **info}
+    if session.palm is not None:
+        fit, px = _palm(session, cam, image, frame, markers_px)
+        has_depth = depth_path(session.root, frame).exists()
+        write_text(dest / "palm.toml", _palm_toml(session, fit, px, frame, has_depth))
+        result["palm_toml"] = str(dest / "palm.toml")
+        result["palm_link_residual_cm"] = [round(float(v) * 100, 2) for v in fit.link_residual_m]
+    write_camera_yaml(dest / "camera.yaml", cam)
+    return result

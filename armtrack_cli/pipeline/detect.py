@@ -1,0 +1,67 @@
+"""`armtrack detect`: the wrist patch (CamShift) or every palm-marker candidate, per frame."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.detect.palm_blobs import PalmBlobDetector, PalmBlobSettings
+from armtrack_cli.detect.patch_tracker import PatchSettings, PatchTracker
+from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.session.config import load_session, require
+from armtrack_cli.session.outputs import write_table
+from armtrack_cli.session.recipe import section
+from armtrack_cli.session.video import iter_frames_ahead, probe_video
+
+
+def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | None = None,
+           sets: tuple[str, ...] = (), on_frame=None) -> dict[str, Any]:
+    session = load_session(path)
+    require(session, "camera", "video")
+    doc, where = resolve_recipe(recipe, sets)
+    video = probe_video(session.camera.video)
+    start = time.perf_counter()
+    if session.palm is not None:
+        settings = section(doc, "detect.palm", PalmBlobSettings, where)
+        det = PalmBlobDetector(session.palm.colour.low, session.palm.colour.high, settings)
+        rows = []
+        for i, t, img in iter_frames_ahead(video):
+            for k, (u, v, area, score) in enumerate(det.detect(img)):
+                rows.append((i, t, k, u, v, int(area), score))
+            if on_frame:
+                on_frame(i + 1)
+        table = pd.DataFrame(rows, columns=["frame", "t", "blob", "u", "v", "area", "score"])
+        summary = {"blobs": len(rows), "frames_with_6_or_more": int(
+            (table.groupby("frame").size() >= 6).sum()) if rows else 0}
+    else:
+        if session.camera.patch is None:
+            raise ConfigError(session.toml_path, "[camera] patch is missing, which detect needs",
+                              "add patch = { hsv_low = [H, S, V], hsv_high = [H, S, V] }")
+        settings = section(doc, "detect.patch", PatchSettings, where)
+        tracker = PatchTracker(session.camera.patch.low, session.camera.patch.high, settings)
+        for i, _, img in iter_frames_ahead(video):
+            tracker.step(i, img)
+            if on_frame:
+                on_frame(i + 1)
+        d = tracker.detections(video.fps)
+        table = pd.DataFrame({"frame": np.arange(d.shape[0]), "t": video.t[:d.shape[0]],
+                              "u": d[:, 0], "v": d[:, 1], "ok": d[:, 5].astype(int),
+                              "width": d[:, 2], "height": d[:, 3], "angle": d[:, 4]})
+        ok = d[:, 5] == 1
+        lost = np.flatnonzero(np.diff(np.r_[0, (~ok).astype(int), 0]) != 0).reshape(-1, 2)
+        summary = {"ok_frames": int(ok.sum()), "lost_spans": len(lost),
+                   "longest_loss_s": round(float((lost[:, 1] - lost[:, 0]).max() / video.fps), 3)
+                   if len(lost) else 0.0}
+    elapsed = time.perf_counter() - start
+    dest = out_dir(session, out)
+    write_table(dest / "detections.csv", table, command="detect",
+                settings={"recipe": where, **dataclasses.asdict(settings)})
+    return {"detections": str(dest / "detections.csv"), "frames": video.n_frames,
+            "seconds": round(elapsed, 3), "frames_per_s": round(video.n_frames / elapsed, 1),
+            "kind": "palm" if session.palm is not None else "patch", **summary}
