@@ -1,0 +1,100 @@
+"""Gaussian filters on one state (x, P): Kalman, extended and unscented, as pure functions.
+
+Every ``update`` accepts ``z=None`` (a missing measurement) and returns the state unchanged.
+Functions f, h take time-first arrays (..., n) so the UKF pushes all sigma points at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Gaussian:
+    x: np.ndarray  # (n,)
+    P: np.ndarray  # (n, n)
+
+
+def _joseph(P, K, H, R):
+    """Joseph form (I − KH) P (I − KH)ᵀ + K R Kᵀ: symmetric and positive whatever K is."""
+    I_KH = np.eye(P.shape[0]) - K @ H
+    return I_KH @ P @ I_KH.T + K @ R @ K.T
+
+
+def kf_predict(s: Gaussian, F: np.ndarray, Q: np.ndarray, b: np.ndarray | None = None) -> Gaussian:
+    """x⁻ = F x + b, P⁻ = F P Fᵀ + Q."""
+    x = F @ s.x + (0 if b is None else b)
+    return Gaussian(x, F @ s.P @ F.T + Q)
+
+
+def kf_update(s: Gaussian, z: np.ndarray | None, H: np.ndarray, R: np.ndarray) -> Gaussian:
+    """K = P Hᵀ (H P Hᵀ + R)⁻¹; x = x + K (z − H x)."""
+    if z is None:
+        return s
+    S = H @ s.P @ H.T + R
+    K = np.linalg.solve(S.T, (s.P @ H.T).T).T
+    return Gaussian(s.x + K @ (z - H @ s.x), _joseph(s.P, K, H, R))
+
+
+def ekf_update(s: Gaussian, z: np.ndarray | None, h, H_jac, R: np.ndarray) -> Gaussian:
+    """Linearise h at the prior mean: H = ∂h/∂x (x⁻); innovation z − h(x⁻)."""
+    if z is None:
+        return s
+    H = H_jac(s.x)
+    S = H @ s.P @ H.T + R
+    K = np.linalg.solve(S.T, (s.P @ H.T).T).T
+    return Gaussian(s.x + K @ (z - h(s.x)), _joseph(s.P, K, H, R))
+
+
+@dataclass(frozen=True)
+class SigmaPoints:
+    """Van der Merwe's scaled sigma points (Wan & van der Merwe 2000)."""
+
+    n: int
+    alpha: float = 0.5
+    beta: float = 2.0
+    kappa: float = 0.0
+
+    @property
+    def lam(self) -> float:
+        return self.alpha**2 * (self.n + self.kappa) - self.n
+
+    def weights(self) -> tuple[np.ndarray, np.ndarray]:
+        c = 0.5 / (self.n + self.lam)
+        Wm = np.full(2 * self.n + 1, c)
+        Wc = Wm.copy()
+        Wm[0] = self.lam / (self.n + self.lam)
+        Wc[0] = Wm[0] + 1 - self.alpha**2 + self.beta
+        return Wm, Wc
+
+    def points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """(2n+1, n): x, x ± columns of √((n+λ) P)."""
+        L = np.linalg.cholesky((self.n + self.lam) * P)
+        return np.vstack([x, x + L.T, x - L.T])
+
+
+def ukf_predict(s: Gaussian, f, Q: np.ndarray, sp: SigmaPoints) -> Gaussian:
+    """Sigma points through f (vectorised over the first axis)."""
+    Wm, Wc = sp.weights()
+    Y = f(sp.points(s.x, s.P))
+    x = Wm @ Y
+    d = Y - x
+    return Gaussian(x, (Wc[:, None] * d).T @ d + Q)
+
+
+def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoints) -> Gaussian:
+    """Measurement sigma points Z = h(X); K = P_xz P_zz⁻¹."""
+    if z is None:
+        return s
+    Wm, Wc = sp.weights()
+    X = sp.points(s.x, s.P)
+    Z = h(X)
+    zm = Wm @ Z
+    dz, dx = Z - zm, X - s.x
+    Pzz = (Wc[:, None] * dz).T @ dz + R
+    Pxz = (Wc[:, None] * dx).T @ dz
+    K = np.linalg.solve(Pzz.T, Pxz.T).T
+    P = s.P - K @ Pzz @ K.T
+    return Gaussian(s.x + K @ (z - zm), 0.5 * (P + P.T))
