@@ -40,6 +40,9 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 
+validate: $(STAMP)
+	$(BIN)/python validation/run.py
+
 docs: $(STAMP)
 	$(BIN)/python -c "from armtrack_cli.cli import render_reference as r; open('docs/cli.md','w').write(r())"
 

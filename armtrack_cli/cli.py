@@ -158,6 +158,55 @@ def detect(sessions, recipe, sets, as_json, out_dir) -> None:
         _emit(r, as_json, [line + f", {r['frames_per_s']:.0f} frames/s -> {r['detections']}"])
 
 
+METHOD_CHOICE = click.Choice(["inertial", "ekf", "ukf", "pf", "pf-constraint"])
+
+
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@recipe_option
+@click.option("--method", type=METHOD_CHOICE, help="Fusion method (overrides the recipe's).")
+@click.option("--particles", type=click.IntRange(min=10), help="Particles (PF methods).")
+@click.option("--seed", type=int, help="Random seed (same seed, same bytes).")
+@set_option
+@json_option
+@out_option
+def fuse(sessions, recipe, method, particles, seed, sets, as_json, out_dir) -> None:
+    """IMU and camera detections fused into wrist and elbow trajectories
+    (trajectory-METHOD.csv) and their clinical measures (kinematics-METHOD.csv).
+
+    Without --method or --recipe the method is pf-constraint, Tao & Hu's layered particle
+    filter with the arm-geometry constraint.
+    """
+    for folder in _expand(sessions):
+        r = pipeline.fuse(folder, method=method, particles=particles, seed=seed, recipe=recipe,
+                          sets=sets, out=_out_for(out_dir, folder, sessions))
+        _emit(r, as_json, [f"{folder}: {r['method']}: {r['frames']} frames "
+                           f"({r['detections_used']} with a detection), "
+                           f"{r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"])
+
+
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("--method", "methods", type=METHOD_CHOICE, multiple=True,
+              help="Methods to score (repeatable); default: every trajectory present.")
+@json_option
+@out_option
+def compare(sessions, methods, as_json, out_dir) -> None:
+    """Trajectories scored against Qualisys: errors.csv (per method, joint and axis: mean,
+    SD, RMSE, max, % within ±5 cm) and measures.csv; prints Tao & Hu's Table I."""
+    for folder in _expand(sessions):
+        r = pipeline.compare(folder, methods=tuple(methods),
+                             out=_out_for(out_dir, folder, sessions))
+        excl = {k: v for k, v in r["excluded_frames"].items() if v}
+        lines = [f"{folder}:", r["table"]]
+        if excl:
+            lines.append("frames without ground truth (gaps), excluded: " +
+                         ", ".join(f"{k} {v}" for k, v in excl.items()))
+        lines.append(f"-> {r['errors']}, {r['measures']}")
+        r = {k: v for k, v in r.items() if k not in ("rows", "table")}
+        _emit(r, as_json, lines)
+
+
 def _expand(items) -> list[str]:
     """Session folders: each argument, or the session folders inside a folder of sessions."""
     out = []

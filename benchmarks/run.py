@@ -52,9 +52,9 @@ def main() -> None:
             folder = SAMPLES / name
             video = probe_video(load_session(folder).camera.video)
             n = video.n_frames
-            dec = best_of(lambda: sum(1 for _ in iter_frames(video)))
-            dec2 = best_of(lambda: sum(1 for _ in iter_frames_ahead(video)))
-            det = best_of(lambda: pipeline.detect(folder, out=os.path.join(tmp, name)))
+            dec = best_of(lambda v=video: sum(1 for _ in iter_frames(v)))
+            dec2 = best_of(lambda v=video: sum(1 for _ in iter_frames_ahead(v)))
+            det = best_of(lambda f=folder, n=name: pipeline.detect(f, out=os.path.join(tmp, n)))
             kind = "palm blobs" if name.startswith("wrist") else "wrist patch (CamShift)"
             rows.append((f"decode only, {name}", n, dec, ""))
             rows.append((f"decode on a second thread, {name}", n, dec2, ""))

@@ -75,7 +75,8 @@ def test_particle_filter_matches_the_kalman_filter():
             p = reweight(p, -0.5 * np.einsum("ni,ij,nj->n", d, Rinv, d))
         if ess(p) < N / 2:
             p, _ = resample(p, "systematic", rng)
-        mean, sd = moments(p)
+        mean, cov = moments(p)
+        sd = np.sqrt(np.diag(cov))
         sigma = np.sqrt(np.diag(kf.P))
         assert np.all(np.abs(mean - kf.x) < 0.1 * sigma), (mean - kf.x) / sigma
         np.testing.assert_allclose(sd, sigma, rtol=0.15)

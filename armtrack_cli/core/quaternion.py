@@ -108,3 +108,18 @@ def angle_between(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Rotation angle (rad) of p* ⊗ q, in [0, π]."""
     d = np.abs(np.sum(normalize(p) * normalize(q), axis=-1))
     return 2 * np.arccos(np.clip(d, 0.0, 1.0))
+
+
+def interpolate(t_src: np.ndarray, q: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Quaternions at times t by normalised linear interpolation between the neighbouring
+    samples (after making consecutive samples the same hemisphere); NaN outside t_src."""
+    q = np.array(q, dtype=float)
+    flip = np.r_[False, np.sum(q[1:] * q[:-1], axis=1) < 0]
+    sign = np.where(np.cumsum(flip) % 2 == 1, -1.0, 1.0)
+    q *= sign[:, None]
+    i = np.clip(np.searchsorted(t_src, t, side="right"), 1, t_src.size - 1)
+    t0, t1 = t_src[i - 1], t_src[i]
+    f = ((t - t0) / np.where(t1 > t0, t1 - t0, 1.0))[:, None]
+    out = normalize(q[i - 1] * (1 - f) + q[i] * f)
+    out[(t < t_src[0]) | (t > t_src[-1])] = np.nan
+    return out

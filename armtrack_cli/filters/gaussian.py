@@ -98,3 +98,24 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
     K = np.linalg.solve(Pzz.T, Pxz.T).T
     P = s.P - K @ Pzz @ K.T
     return Gaussian(s.x + K @ (z - zm), 0.5 * (P + P.T))
+
+
+def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray, b: np.ndarray,
+               Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rauch-Tung-Striebel fixed-interval smoother.
+
+    x (K, n), P (K, n, n): filtered means and covariances; F (K, n, n), b (K, n), Q (K, n, n):
+    the step into k (x_k = F_k x_{k-1} + b_k + w, w ~ N(0, Q_k); index 0 unused).
+    C_k = P_k F_{k+1}ᵀ P⁻_{k+1}⁻¹, x^s_k = x_k + C_k (x^s_{k+1} − x⁻_{k+1}),
+    P^s_k = P_k + C_k (P^s_{k+1} − P⁻_{k+1}) C_kᵀ (Rauch, Tung & Striebel 1965).
+    """
+    xs, Ps = x.copy(), P.copy()
+    for k in range(x.shape[0] - 2, -1, -1):
+        Fk = F[k + 1]
+        xp = Fk @ x[k] + b[k + 1]
+        Pp = Fk @ P[k] @ Fk.T + Q[k + 1]
+        C = np.linalg.solve(Pp.T, (P[k] @ Fk.T).T).T
+        xs[k] = x[k] + C @ (xs[k + 1] - xp)
+        Pk = P[k] + C @ (Ps[k + 1] - Pp) @ C.T
+        Ps[k] = 0.5 * (Pk + Pk.T)
+    return xs, Ps

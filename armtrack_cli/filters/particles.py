@@ -46,8 +46,8 @@ def resample(p: Particles, name: str, rng: np.random.Generator) -> tuple[Particl
 
 
 def moments(p: Particles) -> tuple[np.ndarray, np.ndarray]:
-    """Weighted mean (d,) and standard deviation (d,)."""
+    """Weighted mean (d,) and covariance (d, d)."""
     w = p.weights()
     mean = w @ p.x
-    var = w @ (p.x - mean) ** 2
-    return mean, np.sqrt(np.maximum(var, 0.0))
+    d = p.x - mean
+    return mean, (w[:, None] * d).T @ d

@@ -22,8 +22,10 @@ def _cdf(w: np.ndarray) -> np.ndarray:
 
 
 def multinomial(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """N independent draws from the weights."""
-    return _search(_cdf(w), rng.random(w.size))
+    """N independent draws from the weights. (The uniforms are sorted before the search:
+    the draws are exchangeable, so the offspring counts have the same law, and a search with
+    sorted keys is faster.)"""
+    return _search(_cdf(w), np.sort(rng.random(w.size)))
 
 
 def stratified(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -47,15 +49,15 @@ def residual(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     with weights that were not renormalised, or a fixed count, biases the counts.)
     """
     n = w.size
-    nw = n * w / w.sum()
-    counts = np.floor(nw).astype(np.int64)
-    k = n - int(counts.sum())
+    nw = n * (w / w.sum())
+    counts = nw.astype(np.int64)  # floor, the weights being non-negative
     det = np.repeat(np.arange(n), counts)
+    k = n - det.size
     if k == 0:
         return det
-    frac = nw - counts
-    extra = _search(_cdf(frac), rng.random(k))
-    return np.sort(np.concatenate([det, extra]))
+    cdf = np.cumsum(nw - counts)
+    extra = np.searchsorted(cdf, np.sort(rng.random(k)) * cdf[-1], side="right")
+    return np.concatenate([det, np.minimum(extra, n - 1)])
 
 
 SCHEMES = {"residual": residual, "systematic": systematic, "stratified": stratified,

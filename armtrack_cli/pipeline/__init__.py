@@ -17,8 +17,11 @@ files, so each can be run alone.
 """
 
 from armtrack_cli.pipeline.calibrate import calibrate
+from armtrack_cli.pipeline.compare import compare
 from armtrack_cli.pipeline.detect import detect
+from armtrack_cli.pipeline.fuse import fuse
 from armtrack_cli.pipeline.info import format_info, info
 from armtrack_cli.pipeline.simulate import simulate, simulate_command
 
-__all__ = ["info", "format_info", "calibrate", "detect", "simulate", "simulate_command"]
+__all__ = ["info", "format_info", "calibrate", "detect", "fuse", "compare", "simulate",
+           "simulate_command"]

@@ -1,0 +1,59 @@
+"""Estimate-versus-truth errors: time association with gaps kept missing, then per-axis and
+3-D statistics in centimetres (the layout of Tao & Hu's Table I: mean/SD per axis)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+AXES = ("x", "y", "z", "3d")
+COLUMNS = ("method", "joint", "axis", "mean_cm", "std_cm", "rmse_cm", "max_abs_cm",
+           "within_5cm_pct", "n")
+
+
+def truth_at(t: np.ndarray, t_truth: np.ndarray, xyz: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Linear interpolation of (M, 3) truth at times t. Where either neighbour is missing, or
+    t is outside the truth or in a gap longer than 1.5 samples, the result is NaN."""
+    out = np.full((t.size, 3), np.nan)
+    i = np.searchsorted(t_truth, t, side="right")
+    ok = (i > 0) & (i < t_truth.size)
+    i0, i1 = np.clip(i - 1, 0, t_truth.size - 1), np.clip(i, 0, t_truth.size - 1)
+    span = t_truth[i1] - t_truth[i0]
+    ok &= span <= 1.5 / rate_hz
+    ok &= np.isfinite(xyz[i0]).all(axis=1) & np.isfinite(xyz[i1]).all(axis=1)
+    f = np.where(span > 0, (t - t_truth[i0]) / np.where(span > 0, span, 1), 0.0)[:, None]
+    out[ok] = (xyz[i0] * (1 - f) + xyz[i1] * f)[ok]
+    return out
+
+
+def error_rows(method: str, joint: str, est: np.ndarray, truth: np.ndarray) -> list[dict]:
+    """Signed error est − truth, per axis and 3-D, over frames where both exist."""
+    ok = np.isfinite(est).all(axis=1) & np.isfinite(truth).all(axis=1)
+    e = (est[ok] - truth[ok]) * 100.0  # cm
+    rows = []
+    for k, axis in enumerate(AXES):
+        v = e[:, k] if axis != "3d" else np.linalg.norm(e, axis=1)
+        n = int(v.size)
+        if n == 0:
+            rows.append({"method": method, "joint": joint, "axis": axis, "mean_cm": np.nan,
+                         "std_cm": np.nan, "rmse_cm": np.nan, "max_abs_cm": np.nan,
+                         "within_5cm_pct": np.nan, "n": 0})
+            continue
+        rows.append({"method": method, "joint": joint, "axis": axis,
+                     "mean_cm": float(v.mean()), "std_cm": float(v.std(ddof=1)) if n > 1 else 0.0,
+                     "rmse_cm": float(np.sqrt(np.mean(v**2))), "max_abs_cm": float(np.abs(v).max()),
+                     "within_5cm_pct": float(100.0 * np.mean(np.abs(v) <= 5.0)), "n": n})
+    return rows
+
+
+def table_one(rows: list[dict], joint: str = "wrist") -> str:
+    """Tao & Hu's Table I: one row per method, 'mean/SD' of each axis error in cm."""
+    methods = list(dict.fromkeys(r["method"] for r in rows if r["joint"] == joint))
+    lines = [f"{joint} error (cm), mean/SD   {'X':>14} {'Y':>14} {'Z':>14} {'3-D RMSE':>9} "
+             f"{'±5 cm %':>8}"]
+    for m in methods:
+        by = {r["axis"]: r for r in rows if r["method"] == m and r["joint"] == joint}
+        cells = [f"{by[a]['mean_cm']:.2f}/{by[a]['std_cm']:.2f}" for a in ("x", "y", "z")]
+        worst = min(by[a]["within_5cm_pct"] for a in ("x", "y", "z"))
+        lines.append(f"{m:<29} {cells[0]:>14} {cells[1]:>14} {cells[2]:>14} "
+                     f"{by['3d']['rmse_cm']:>9.2f} {worst:>8.1f}")
+    return "\n".join(lines)

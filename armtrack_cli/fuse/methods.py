@@ -1,0 +1,165 @@
+"""The five methods as pure predict/update steps over one frame interval, and the one loop
+that runs them (``run``). Inputs are per-frame arrays; outputs are per-frame estimates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armtrack_cli.filters import gaussian as G
+from armtrack_cli.filters.resampling import scheme
+from armtrack_cli.fuse.models import Arm, Projection, Steps
+from armtrack_cli.fuse.settings import FuseSettings
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Per camera frame k: the composite IMU step into k, the detection (NaN = none), the IMU
+    orientation at the frame time."""
+
+    steps: Steps
+    z: np.ndarray  # (K, 2) px, NaN where the patch was not detected
+    q_WB: np.ndarray  # (K, 4)
+
+
+@dataclass(frozen=True)
+class Estimates:
+    mean: np.ndarray  # (K, 6) wrist position and velocity
+    cov: np.ndarray  # (K, 6, 6)
+    ess: np.ndarray | None  # (K,) particle filters only
+
+    @property
+    def sd(self) -> np.ndarray:
+        return np.sqrt(np.maximum(np.diagonal(self.cov, axis1=1, axis2=2), 0.0))
+
+
+def _z(inp: Inputs, k: int) -> np.ndarray | None:
+    return None if np.isnan(inp.z[k]).any() else inp.z[k]
+
+
+def run_gaussian(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection, s: FuseSettings,
+                 method: str) -> Estimates:
+    """inertial (prediction only), EKF or UKF, started at frame 0 with (x0, P0)."""
+    K = inp.z.shape[0]
+    R = s.pixel_sigma**2 * np.eye(2)
+    sp = G.SigmaPoints(6, s.ukf_alpha, s.ukf_beta, s.ukf_kappa)
+    st = G.Gaussian(x0, P0)
+    mean, cov = np.empty((K, 6)), np.empty((K, 6, 6))
+    for k in range(K):
+        if k > 0:
+            if method == "ukf":
+                st = G.ukf_predict(st, lambda X, k=k: inp.steps.apply(k, X), inp.steps.Q(k), sp)
+            else:  # linear process: the KF prediction is the EKF's (eq. 6)
+                st = G.kf_predict(st, inp.steps.F(k), inp.steps.Q(k), inp.steps.b(k))
+        z = _z(inp, k)
+        if method == "ekf":
+            st = G.ekf_update(st, z, lambda x: proj(x[:3]),
+                              lambda x: np.hstack([proj.jacobian(x[:3]), np.zeros((2, 3))]), R)
+        elif method == "ukf":
+            st = G.ukf_update(st, z, lambda X: proj(X[:, :3]), R, sp)
+        mean[k], cov[k] = st.x, st.P
+    return Estimates(mean, cov, None)
+
+
+def _predict_particles(x: np.ndarray, inp: Inputs, k: int, eps: np.ndarray) -> np.ndarray:
+    """Sample the dynamic model (eq. 10): x_k ~ N(F x + b, Q), the proposal (eq. 12);
+    eps (N, 6) standard normals."""
+    a, c, e = inp.steps.noise_factors(k)
+    x = inp.steps.apply(k, x)
+    x[:, :3] += a * eps[:, :3]
+    x[:, 3:] += c * eps[:, :3] + e * eps[:, 3:]
+    return x
+
+
+def _weights(loglik: np.ndarray) -> np.ndarray:
+    """Normalised weights from log-likelihoods of equally weighted particles (eq. 14)."""
+    w = np.exp(loglik - loglik.max())
+    return w / w.sum()
+
+
+def _moments(x: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    mean = w @ x
+    d = x - mean
+    return mean, (w[:, None] * d).T @ d
+
+
+def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+                  s: FuseSettings, arm: Arm | None, constrained: bool) -> Estimates:
+    """Bootstrap PF (eqs. 12-14), or the layered-sampling PF of section III-E, steps 1-7.
+
+    Particles are an (N, 6) array. After every resampling the weights are equal, so each
+    layer's weights are just its normalised likelihood."""
+    rng = np.random.default_rng(s.seed)
+    K, N = inp.z.shape[0], s.particles
+    resample = scheme(s.resampling)
+    x = rng.multivariate_normal(x0, P0, size=N)
+    w = np.full(N, 1.0 / N)
+    walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
+    centres = arm.sphere_centres(inp.q_WB) if constrained else None
+    mean, cov, n_eff = np.empty((K, 6)), np.empty((K, 6, 6)), np.empty(K)
+    inv2s2 = 0.5 / s.pixel_sigma**2
+    inv2c2 = 0.5 / s.constraint_sigma_m**2
+    for k in range(K):
+        eps = rng.standard_normal((N, 12))
+        if k > 0:  # step 1: particle prediction from p¹ (eq. 10)
+            x = _predict_particles(x, inp, k, eps[:, :6])
+        z = _z(inp, k)
+        if z is not None:  # step 2: weights from the colour-tracking likelihood (eq. 11)
+            d = proj(x[:, :3]) - z
+            loglik = -inv2s2 * np.einsum("ij,ij->i", d, d) + np.log(w)
+            w = _weights(loglik)
+        n_eff[k] = 1.0 / (w @ w)
+        if constrained:
+            if z is not None:  # step 3 (without a detection the weights are still equal)
+                x = x[resample(w, rng)]
+            # step 4: random-walk layer p² (eq. 17, 18)
+            x = x + eps[:, 6:] * walk
+            # step 5: arm-geometry likelihood (eq. 15, 16). The paper's σ is written "0.01 ms"
+            # and described as a 1 cm deviation of the upper-arm length: we implement the
+            # 1 cm on the length residual |E − S| − L1 (≈ the squared form with σ = 2 L1 cm).
+            r = np.sqrt(np.einsum("ij,ij->i", x[:, :3] - centres[k], x[:, :3] - centres[k])) - arm.L1
+            w = _weights(-inv2c2 * r * r)
+            mean[k], cov[k] = _moments(x, w)
+            x = x[resample(w, rng)]  # step 6
+            w = np.full(N, 1.0 / N)
+        else:
+            mean[k], cov[k] = _moments(x, w)
+            if n_eff[k] < s.pf_resample_ess * N:
+                x = x[resample(w, rng)]
+                w = np.full(N, 1.0 / N)
+    return Estimates(mean, cov, n_eff)
+
+
+def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+        s: FuseSettings, arm: Arm | None) -> Estimates:
+    if method in ("inertial", "ekf", "ukf"):
+        est = run_gaussian(inp, x0, P0, proj, s, method)
+    elif method == "pf":
+        est = run_particles(inp, x0, P0, proj, s, arm, constrained=False)
+    elif method == "pf-constraint":
+        if arm is None:
+            raise ValueError("pf-constraint needs the arm model")
+        est = run_particles(inp, x0, P0, proj, s, arm, constrained=True)
+    else:
+        raise ValueError(f"unknown method {method!r}")
+    if s.smoother == "rts":
+        est = smooth(est, inp, s, method)
+    return est
+
+
+def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimates:
+    """Offline: each frame's estimate also uses every later detection. The filtered Gaussian
+    (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
+    through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
+    to the process noise of each step."""
+    K = est.mean.shape[0]
+    F = np.stack([inp.steps.F(k) for k in range(K)])
+    b = np.stack([inp.steps.b(k) for k in range(K)])
+    Q = np.stack([inp.steps.Q(k) for k in range(K)])
+    if method == "pf-constraint":
+        Q = Q + np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2)
+    Q += 1e-12 * np.eye(6)
+    x, P = G.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), F, b, Q)
+    return Estimates(x, P, est.ess)

@@ -1,0 +1,181 @@
+"""The process and measurement models, written once and shared by every method.
+
+State (Tao & Hu eq. 3): x = (p, v), the wrist joint's position and velocity in W (m, m/s).
+The elbow is not in the state: it follows from the IMU orientation and the forearm (eq. 2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.core.streams import CameraModel
+
+GRAVITY_W = np.array([0.0, 0.0, -9.81])
+
+
+def accel_world(q_WB: np.ndarray, f_B: np.ndarray) -> np.ndarray:
+    """a_W = R_WB f_B + g_W: specific force rotated into W, gravity removed (eq. 4)."""
+    return quat.rotate(q_WB, f_B) + GRAVITY_W
+
+
+@dataclass(frozen=True)
+class Steps:
+    """The exact linear steps between consecutive camera frames k-1 -> k (eqs. 5, 6).
+
+    With the acceleration held between IMU samples, p_k = p + v Δ + dp, v_k = v + dv, and
+    continuous white acceleration noise of density q adds Q(Δ) = q [[Δ³/3, Δ²/2], [Δ²/2, Δ]].
+    Folding every IMU sample between two frames into one step is exact for this linear model.
+    """
+
+    dt: np.ndarray  # (K,) Δ, s (dt[0] = 0)
+    dp: np.ndarray  # (K, 3) m
+    dv: np.ndarray  # (K, 3) m/s
+    q: float  # acceleration noise density, m²/s³
+
+    def F(self, k: int) -> np.ndarray:
+        F = np.eye(6)
+        F[:3, 3:] = self.dt[k] * np.eye(3)
+        return F
+
+    def b(self, k: int) -> np.ndarray:
+        return np.r_[self.dp[k], self.dv[k]]
+
+    def Q(self, k: int) -> np.ndarray:
+        d = self.dt[k]
+        blk = self.q * np.array([[d**3 / 3, d**2 / 2], [d**2 / 2, d]])
+        return np.kron(blk, np.eye(3))
+
+    def noise_factors(self, k: int) -> tuple[float, float, float]:
+        """(a, c, e) with Q = L Lᵀ ⊗ I₃, L = [[a, 0], [c, e]]: the closed-form Cholesky factor
+        of q [[Δ³/3, Δ²/2], [Δ²/2, Δ]], so position noise is a·ε₁ and velocity noise
+        c·ε₁ + e·ε₂ (ε independent standard normals)."""
+        d = self.dt[k]
+        a = np.sqrt(self.q * d**3 / 3)
+        c = self.q * d**2 / 2 / a if a > 0 else 0.0
+        e = np.sqrt(max(self.q * d - c * c, 0.0))
+        return a, c, e
+
+    def apply(self, k: int, X: np.ndarray) -> np.ndarray:
+        """The deterministic part on states (..., 6)."""
+        out = X.copy()
+        out[..., :3] += X[..., 3:] * self.dt[k] + self.dp[k]
+        out[..., 3:] += self.dv[k]
+        return out
+
+
+def composite_steps(t_imu: np.ndarray, a_W: np.ndarray, t_frames: np.ndarray,
+                    accel_noise: float, imu_period: float) -> Steps:
+    """Integrate the held accelerations a_W (M, 3) at t_imu over each frame interval.
+
+    accel_noise (m/s², per IMU sample) becomes the density q = σ² · T_s.
+    """
+    brk = np.union1d(t_imu, t_frames)
+    brk = brk[(brk >= t_frames[0]) & (brk <= t_frames[-1])]
+    s0, s1 = brk[:-1], brk[1:]
+    j = np.searchsorted(t_imu, s0, side="right") - 1  # the IMU sample held over [s0, s1)
+    a = np.where((j >= 0)[:, None], a_W[np.clip(j, 0, len(t_imu) - 1)], 0.0)
+    k = np.searchsorted(t_frames, s0, side="right")  # the frame interval ending at t_frames[k]
+    T1 = t_frames[k]
+    tau = s1 - s0
+    K = t_frames.size
+    dv = np.zeros((K, 3))
+    dp = np.zeros((K, 3))
+    np.add.at(dv, k, a * tau[:, None])
+    np.add.at(dp, k, a * (((T1 - s0) ** 2 - (T1 - s1) ** 2) / 2)[:, None])
+    dt = np.r_[0.0, np.diff(t_frames)]
+    return Steps(dt, dp, dv, accel_noise**2 * imu_period)
+
+
+class Projection:
+    """Pinhole projection with OpenCV's distortion k1 k2 p1 p2 k3 (Tao & Hu eq. 7 with the lens
+    the camera really has), vectorised over points, with its analytic Jacobian."""
+
+    def __init__(self, cam: CameraModel):
+        self.K, self.R, self.T = cam.K, cam.R_WC, cam.T_WC
+        d = np.zeros(5)
+        d[: min(5, cam.dist.size)] = cam.dist[:5]
+        self.k1, self.k2, self.p1, self.p2, self.k3 = d
+        self.eye = -self.R.T @ self.T
+        self.cam = cam
+
+    def __call__(self, P: np.ndarray) -> np.ndarray:
+        """Pixels (..., 2) of points P (..., 3) in W."""
+        X = P @ self.R.T + self.T
+        x, y = X[..., 0] / X[..., 2], X[..., 1] / X[..., 2]
+        r2 = x * x + y * y
+        rad = 1 + r2 * (self.k1 + r2 * (self.k2 + r2 * self.k3))
+        xd = x * rad + 2 * self.p1 * x * y + self.p2 * (r2 + 2 * x * x)
+        yd = y * rad + self.p1 * (r2 + 2 * y * y) + 2 * self.p2 * x * y
+        return np.stack([self.K[0, 0] * xd + self.K[0, 2], self.K[1, 1] * yd + self.K[1, 2]], -1)
+
+    def jacobian(self, p: np.ndarray) -> np.ndarray:
+        """∂(u, v)/∂p (2, 3) at one point p in W."""
+        X = self.R @ p + self.T
+        x, y, Z = X[0] / X[2], X[1] / X[2], X[2]
+        r2 = x * x + y * y
+        rad = 1 + r2 * (self.k1 + r2 * (self.k2 + r2 * self.k3))
+        D = self.k1 + 2 * self.k2 * r2 + 3 * self.k3 * r2 * r2  # ∂rad/∂r²
+        Jd = np.array([
+            [rad + 2 * x * x * D + 2 * self.p1 * y + 6 * self.p2 * x,
+             2 * x * y * D + 2 * self.p1 * x + 2 * self.p2 * y],
+            [2 * x * y * D + 2 * self.p1 * x + 2 * self.p2 * y,
+             rad + 2 * y * y * D + 6 * self.p1 * y + 2 * self.p2 * x]])
+        Jn = np.array([[1 / Z, 0, -X[0] / Z**2], [0, 1 / Z, -X[1] / Z**2]])
+        return np.diag([self.K[0, 0], self.K[1, 1]]) @ Jd @ Jn @ self.R
+
+    def ray(self, uv: np.ndarray) -> np.ndarray:
+        """Unit direction in W of the ray through an observed pixel."""
+        n = cv2.undistortPoints(np.asarray(uv, float).reshape(1, 1, 2), self.K,
+                                self.cam.dist).reshape(2)
+        d = self.R.T @ np.r_[n, 1.0]
+        return d / np.linalg.norm(d)
+
+
+@dataclass(frozen=True)
+class Arm:
+    """Tao & Hu's arm: fixed shoulder S, upper arm L1, forearm L2 along the IMU's forearm axis."""
+
+    shoulder: np.ndarray
+    L1: float
+    L2: float
+    forearm_B: np.ndarray  # unit vector in B from the elbow towards the hand
+
+    def elbow(self, p: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
+        """Eq. 2 with the contract's axis: the elbow is L2 behind the wrist along the forearm."""
+        return p - self.L2 * quat.rotate(q_WB, self.forearm_B)
+
+    def upper_arm_residual(self, p: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
+        """|E − S| − L1 for wrist positions p (..., 3) (the length form of eq. 15)."""
+        return np.linalg.norm(self.elbow(p, q_WB) - self.shoulder, axis=-1) - self.L1
+
+    def sphere_centres(self, q_WB: np.ndarray) -> np.ndarray:
+        """(K, 3) S + L2 R_WB u per frame: |p − centre| = |E − S|, so the residual of eq. 15 is
+        |p − centre| − L1 (computed once for all frames)."""
+        return self.shoulder + self.L2 * quat.rotate(q_WB, self.forearm_B)
+
+
+def initial_wrist(proj: Projection, uv: np.ndarray, *, arm: Arm | None, q_WB: np.ndarray,
+                  plane_height_m: float) -> tuple[np.ndarray, str]:
+    """The wrist on the first detection's ray, from session data only.
+
+    With the arm model the ray meets the sphere |p − (S + L2·R u)| = L1 twice; the start is at
+    rest on the table, so the intersection above the table and nearest to it is taken. Without
+    an arm model the ray meets the plane z = plane_height_m.
+    """
+    c, d = proj.eye, proj.ray(uv)
+    if arm is None:
+        s = (plane_height_m - c[2]) / d[2]
+        return c + s * d, f"ray and the plane z = {plane_height_m:.3f} m"
+    centre = arm.shoulder + arm.L2 * quat.rotate(q_WB, arm.forearm_B)
+    oc = c - centre
+    bq, cq = d @ oc, oc @ oc - arm.L1**2
+    disc = bq * bq - cq
+    if disc < 0:  # the ray misses the sphere: the ray's point nearest to it
+        return c - bq * d, "nearest point of the ray to the arm sphere (no intersection)"
+    cands = [c + s * d for s in (-bq - np.sqrt(disc), -bq + np.sqrt(disc)) if s > 0]
+    above = [p for p in cands if p[2] >= -0.01] or cands
+    return min(above, key=lambda p: p[2]), "ray and the arm sphere, the point nearest the table"
