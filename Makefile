@@ -20,6 +20,9 @@ demo: $(STAMP)
 	$(BIN)/armtrack info $(DEMO)
 	$(BIN)/armtrack calibrate $(DEMO) --out $(DEMO_OUT)/circle-01
 	$(BIN)/armtrack detect $(DEMO) --out $(DEMO_OUT)/circle-01
+	$(BIN)/armtrack fuse $(DEMO) --method ekf --out $(DEMO_OUT)/circle-01
+	$(BIN)/armtrack fuse $(DEMO) --method pf-constraint --out $(DEMO_OUT)/circle-01
+	$(BIN)/armtrack compare $(DEMO) --out $(DEMO_OUT)/circle-01
 	$(BIN)/armtrack info sample_sessions/wrist-rom-01
 	$(BIN)/armtrack calibrate sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01
 	$(BIN)/armtrack detect sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01

@@ -10,7 +10,7 @@ import numpy as np
 
 from armtrack_cli.filters import gaussian as G
 from armtrack_cli.filters.resampling import scheme
-from armtrack_cli.fuse.models import Arm, Projection, Steps
+from armtrack_cli.fuse.models import Arm, Projection, Steps  # noqa: F401  (Steps: annotations)
 from armtrack_cli.fuse.settings import FuseSettings
 
 
@@ -63,14 +63,14 @@ def run_gaussian(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection, 
     return Estimates(mean, cov, None)
 
 
-def _predict_particles(x: np.ndarray, inp: Inputs, k: int, eps: np.ndarray) -> np.ndarray:
+def _predict_particles(x: np.ndarray, st: Steps, k: int, ace: np.ndarray,
+                       eps: np.ndarray) -> np.ndarray:
     """Sample the dynamic model (eq. 10): x_k ~ N(F x + b, Q), the proposal (eq. 12);
-    eps (N, 6) standard normals."""
-    a, c, e = inp.steps.noise_factors(k)
-    x = inp.steps.apply(k, x)
-    x[:, :3] += a * eps[:, :3]
-    x[:, 3:] += c * eps[:, :3] + e * eps[:, 3:]
-    return x
+    ace = (a, c, e), the Cholesky factor of Q; eps (N, 6) standard normals."""
+    a, c, e = ace
+    p, v = x[:, :3], x[:, 3:]
+    return np.hstack([p + v * st.dt[k] + st.dp[k] + a * eps[:, :3],
+                      v + st.dv[k] + c * eps[:, :3] + e * eps[:, 3:]])
 
 
 def _weights(loglik: np.ndarray) -> np.ndarray:
@@ -101,11 +101,13 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     mean, cov, n_eff = np.empty((K, 6)), np.empty((K, 6, 6)), np.empty(K)
     inv2s2 = 0.5 / s.pixel_sigma**2
     inv2c2 = 0.5 / s.constraint_sigma_m**2
+    ace = inp.steps.noise_factors()
+    seen = np.isfinite(inp.z).all(axis=1)
     for k in range(K):
         eps = rng.standard_normal((N, 12))
         if k > 0:  # step 1: particle prediction from p¹ (eq. 10)
-            x = _predict_particles(x, inp, k, eps[:, :6])
-        z = _z(inp, k)
+            x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
+        z = inp.z[k] if seen[k] else None
         if z is not None:  # step 2: weights from the colour-tracking likelihood (eq. 11)
             d = proj(x[:, :3]) - z
             loglik = -inv2s2 * np.einsum("ij,ij->i", d, d) + np.log(w)
@@ -119,7 +121,8 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             # step 5: arm-geometry likelihood (eq. 15, 16). The paper's σ is written "0.01 ms"
             # and described as a 1 cm deviation of the upper-arm length: we implement the
             # 1 cm on the length residual |E − S| − L1 (≈ the squared form with σ = 2 L1 cm).
-            r = np.sqrt(np.einsum("ij,ij->i", x[:, :3] - centres[k], x[:, :3] - centres[k])) - arm.L1
+            dc = x[:, :3] - centres[k]
+            r = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - arm.L1
             w = _weights(-inv2c2 * r * r)
             mean[k], cov[k] = _moments(x, w)
             x = x[resample(w, rng)]  # step 6

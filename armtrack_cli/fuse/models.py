@@ -49,15 +49,15 @@ class Steps:
         blk = self.q * np.array([[d**3 / 3, d**2 / 2], [d**2 / 2, d]])
         return np.kron(blk, np.eye(3))
 
-    def noise_factors(self, k: int) -> tuple[float, float, float]:
-        """(a, c, e) with Q = L Lᵀ ⊗ I₃, L = [[a, 0], [c, e]]: the closed-form Cholesky factor
-        of q [[Δ³/3, Δ²/2], [Δ²/2, Δ]], so position noise is a·ε₁ and velocity noise
-        c·ε₁ + e·ε₂ (ε independent standard normals)."""
-        d = self.dt[k]
+    def noise_factors(self) -> np.ndarray:
+        """(K, 3) rows (a, c, e) with Q = L Lᵀ ⊗ I₃, L = [[a, 0], [c, e]]: the closed-form
+        Cholesky factor of q [[Δ³/3, Δ²/2], [Δ²/2, Δ]], so position noise is a·ε₁ and velocity
+        noise c·ε₁ + e·ε₂ (ε independent standard normals). For all frames at once."""
+        d = self.dt
         a = np.sqrt(self.q * d**3 / 3)
-        c = self.q * d**2 / 2 / a if a > 0 else 0.0
-        e = np.sqrt(max(self.q * d - c * c, 0.0))
-        return a, c, e
+        c = np.divide(self.q * d**2 / 2, a, out=np.zeros_like(d), where=a > 0)
+        e = np.sqrt(np.maximum(self.q * d - c * c, 0.0))
+        return np.stack([a, c, e], -1)
 
     def apply(self, k: int, X: np.ndarray) -> np.ndarray:
         """The deterministic part on states (..., 6)."""
@@ -101,16 +101,22 @@ class Projection:
         self.k1, self.k2, self.p1, self.p2, self.k3 = d
         self.eye = -self.R.T @ self.T
         self.cam = cam
+        self._f = np.array([cam.K[0, 0], cam.K[1, 1]])
+        self._c = np.array([cam.K[0, 2], cam.K[1, 2]])
 
     def __call__(self, P: np.ndarray) -> np.ndarray:
-        """Pixels (..., 2) of points P (..., 3) in W."""
+        """Pixels (..., 2) of points P (..., 3) in W (OpenCV's model, on stacked (x, y))."""
         X = P @ self.R.T + self.T
-        x, y = X[..., 0] / X[..., 2], X[..., 1] / X[..., 2]
-        r2 = x * x + y * y
+        n = X[..., :2] / X[..., 2:]  # normalised (x, y)
+        sq = n * n
+        r2 = sq[..., 0] + sq[..., 1]
         rad = 1 + r2 * (self.k1 + r2 * (self.k2 + r2 * self.k3))
-        xd = x * rad + 2 * self.p1 * x * y + self.p2 * (r2 + 2 * x * x)
-        yd = y * rad + self.p1 * (r2 + 2 * y * y) + 2 * self.p2 * x * y
-        return np.stack([self.K[0, 0] * xd + self.K[0, 2], self.K[1, 1] * yd + self.K[1, 2]], -1)
+        d = n * rad[..., None]
+        if self.p1 or self.p2:  # tangential terms (x: 2 p1 xy + p2 (r² + 2x²); y: mirrored)
+            xy2 = 2 * n[..., 0] * n[..., 1]
+            d[..., 0] += self.p1 * xy2 + self.p2 * (r2 + 2 * sq[..., 0])
+            d[..., 1] += self.p2 * xy2 + self.p1 * (r2 + 2 * sq[..., 1])
+        return d * self._f + self._c
 
     def jacobian(self, p: np.ndarray) -> np.ndarray:
         """∂(u, v)/∂p (2, 3) at one point p in W."""
