@@ -7,22 +7,12 @@ that armtrack implements, so the two must agree to round-off (the difference is 
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
+from timing import best_of  # noqa: I001  (benchmarks/ is on sys.path)
 
 from armtrack_cli.filters import gaussian as G
 from armtrack_cli.filters.resampling import SCHEMES
 from armtrack_cli.fuse.methods import Inputs
-
-
-def _time(fn, repeat=3) -> float:
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def gaussian_vs_filterpy(inp: Inputs, proj, x0, P0, sigma_px=4.0) -> list[tuple]:
@@ -107,7 +97,7 @@ def gaussian_vs_filterpy(inp: Inputs, proj, x0, P0, sigma_px=4.0) -> list[tuple]
     rows = []
     for name, ours, theirs in (("EKF", ours_ekf, fp_ekf), ("UKF", ours_ukf, fp_ukf)):
         diff = float(np.abs(ours() - theirs()).max())
-        t_o, t_f = _time(ours), _time(theirs)
+        t_o, t_f = best_of(ours), best_of(theirs)
         rows.append((name, K - 1, t_o / (K - 1) * 1e6, t_f / (K - 1) * 1e6, t_f / t_o,
                      step_diff(name), diff))
     return rows
@@ -130,7 +120,7 @@ def resampling_vs_filterpy(sizes=(500, 5000, 50000)) -> list[tuple]:
         w /= w.sum()
         reps = max(3, 200000 // n)
         for name, fn in SCHEMES.items():
-            t_o = _time(lambda fn=fn, r=reps, w=w: [fn(w, rng) for _ in range(r)]) / reps
-            t_f = _time(lambda name=name, r=reps, w=w: [theirs[name](w) for _ in range(r)]) / reps
+            t_o = best_of(lambda fn=fn, r=reps, w=w: [fn(w, rng) for _ in range(r)]) / reps
+            t_f = best_of(lambda name=name, r=reps, w=w: [theirs[name](w) for _ in range(r)]) / reps
             rows.append((name, n, t_o * 1e6, t_f * 1e6))
     return rows

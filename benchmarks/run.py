@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import platform
 import sys
-import time
 from importlib.metadata import version
 from pathlib import Path
 
@@ -20,7 +19,10 @@ from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.session.config import load_session  # noqa: E402
 from armtrack_cli.session.video import iter_frames, iter_frames_ahead, probe_video  # noqa: E402
 
+sys.path.insert(0, str(Path(__file__).parent))
 SAMPLES = REPO / "sample_sessions"
+
+from timing import best_of  # noqa: E402
 
 
 def cpu() -> str:
@@ -31,15 +33,6 @@ def cpu() -> str:
     except OSError:
         pass
     return platform.processor() or platform.machine()
-
-
-def best_of(fn, runs: int = 3) -> float:
-    best = float("inf")
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def fuse_rows(tmp: str) -> tuple[list, list, list]:

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ImuFileError
-from armtrack_cli.core.streams import ImuSamples, time_gaps
+from armtrack_cli.core.streams import ImuSamples
+from armtrack_cli.session.imu_checks import rate_and_dropped, unit_quaternions
 from armtrack_cli.session.text_table import parse_table, read_text_lines, sniff_delimiter
 
 REQUIRED = ("t", "ax", "ay", "az", "gx", "gy", "gz")
@@ -69,16 +69,9 @@ def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSample
     mag = tab.columns("mx", "my", "mz") if tab.has("mx", "my", "mz") else None
     q = None
     if tab.has("qw", "qx", "qy", "qz"):
-        q = tab.columns("qw", "qx", "qy", "qz")
-        norm = np.linalg.norm(q, axis=1)
-        bad = np.isfinite(norm) & (np.abs(norm - 1.0) > 0.05)
-        if bad.any():
-            r = int(np.flatnonzero(bad)[0])
-            raise ImuFileError(path, f"line {tab.line_of[r]}: quaternion (qw,qx,qy,qz) has norm "
-                               f"{norm[r]:.3f}, not 1", "is the order (w, x, y, z)?")
-        q = quat.normalize(q)
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    gaps = time_gaps(t, dt)
-    dropped = int(np.sum(np.round(np.diff(t)[gaps] / dt) - 1))
-    return ImuSamples(str(path), "csv", t, acc, gyr, mag, q, 1.0 / dt, dropped,
+        q = unit_quaternions(path, tab.columns("qw", "qx", "qy", "qz"),
+                             lambda r: f"line {tab.line_of[r]}", "quaternion (qw,qx,qy,qz)",
+                             "is the order (w, x, y, z)?")
+    rate, dropped = rate_and_dropped(t)
+    return ImuSamples(str(path), "csv", t, acc, gyr, mag, q, rate, dropped,
                       "file" if q is not None else "none", tab.notes)

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import DataError, ImuFileError
-from armtrack_cli.core.streams import ImuSamples, time_gaps
+from armtrack_cli.core.streams import ImuSamples
+from armtrack_cli.session.imu_checks import rate_and_dropped, unit_quaternions
 
 MAGIC = b"\x89MCAP0\r\n"
 IMU_SCHEMAS = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")
@@ -151,16 +151,8 @@ def read_mcap_imu(path: Path, *, topic: str | None = None) -> ImuSamples:
     else:
         q = q.copy()
         q[~has_q] = np.nan
-        norm = np.linalg.norm(q, axis=1)
-        bad = np.isfinite(norm) & (np.abs(norm - 1) > 0.05)
-        if bad.any():
-            r = int(np.flatnonzero(bad)[0])
-            raise ImuFileError(path, f"topic {topic}: message {r} has an orientation of norm "
-                               f"{norm[r]:.3f}, not 1",
-                               "set orientation_covariance[0] = -1 when there is no orientation")
-        q = quat.normalize(q)
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
-    gaps = time_gaps(t, dt)
-    dropped = int(np.sum(np.round(np.diff(t)[gaps] / dt) - 1))
-    return ImuSamples(str(path), "mcap", t, a[:, 9:12], a[:, 6:9], None, q, 1.0 / dt, dropped,
+        q = unit_quaternions(path, q, lambda r: f"topic {topic}: message {r}", "orientation",
+                             "set orientation_covariance[0] = -1 when there is no orientation")
+    rate, dropped = rate_and_dropped(t)
+    return ImuSamples(str(path), "mcap", t, a[:, 9:12], a[:, 6:9], None, q, rate, dropped,
                       "file" if q is not None else "none", tuple(notes))

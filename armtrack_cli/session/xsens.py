@@ -16,6 +16,7 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.core.streams import ImuSamples
+from armtrack_cli.session.imu_checks import unit_quaternions
 from armtrack_cli.session.text_table import (
     TextTable,
     parse_table,
@@ -139,23 +140,14 @@ def _orientation(path: Path, tab: TextTable) -> np.ndarray | None:
     return None
 
 
-def _check_quat_norm(path: Path, tab: TextTable, q: np.ndarray) -> np.ndarray:
-    norm = np.linalg.norm(q, axis=1)
-    bad = np.isfinite(norm) & (np.abs(norm - 1.0) > 0.05)
-    if bad.any():
-        r = int(np.flatnonzero(bad)[0])
-        raise ImuFileError(path, f"line {tab.line_of[r]}: orientation quaternion has norm "
-                           f"{norm[r]:.3f}, not 1", "are the columns mislabelled or scaled?")
-    return quat.normalize(q)
-
-
 def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_rate: float | None,
            rate_hz: float | None, gyro_scale: float, coord: str, notes: list[str]) -> ImuSamples:
     t, rate, dropped, tnotes = _times(path, tab, stf_tick_s=stf_tick_s, header_rate=header_rate,
                                       rate_hz=rate_hz)
     q = _orientation(path, tab)
     if q is not None:
-        q = _check_quat_norm(path, tab, q)
+        q = unit_quaternions(path, q, lambda r: f"line {tab.line_of[r]}",
+                             "orientation quaternion", "are the columns mislabelled or scaled?")
         if coord == "NED":
             q = quat.multiply(Q_NED_TO_ZUP, q)
             notes.append("orientation converted from NED to z-up (180° about x)")

@@ -16,7 +16,13 @@ from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.simulate import imu_model, kinematics, render
 from armtrack_cli.simulate.camera import charuco_board, default_camera, project
-from armtrack_cli.simulate.capture import QTM_TO_WORLD, CameraNoise, qualisys_markers, to_world_toml
+from armtrack_cli.simulate.capture import (
+    QTM_TO_WORLD,
+    CameraNoise,
+    CaptureSettings,
+    qualisys_markers,
+    to_world_toml,
+)
 
 BOARD = {"squares": (7, 5), "square_m": 0.04, "marker_m": 0.03, "dictionary": "DICT_4X4_50"}
 PATCH_BGR = (25, 35, 225)  # saturated red-orange
@@ -26,28 +32,17 @@ QTM_NAMES = ["R_SHO", "R_ELB", "R_WRI"]
 
 
 @dataclass(frozen=True)
-class ArmSimSettings:
+class ArmSimSettings(CaptureSettings):
     task: str = "circle"
-    duration_s: float = 20.0
-    seed: int = 0
-    fps: float = 30.0
-    width: int = 640
-    height: int = 480
-    distortion: bool = True
     imu_rate_hz: float = 100.0
     imu_preset: str = "mtw"
     imu_errors: dict = field(default_factory=dict)  # overrides of ImuErrors fields
     drop_rate: float = 0.0  # fraction of IMU packets dropped (in short bursts)
     forearm_axis: str = "+y"
-    qualisys_hz: float = 100.0
-    marker_noise_m: float = 0.0003
-    gt_gaps: int = 0  # number of 0.1-0.4 s gaps in the wrist marker
     distractor: bool = False
     occlusions: tuple[tuple[float, float], ...] = ()  # (start s, duration s) of a card over the patch
     imu_offset_s: float = -1.0  # session time = IMU time + offset
-    groundtruth_offset_s: float = -1.5
     declare_imu_offset: bool = True  # False writes imu_offset_s = "auto" (truth keeps the value)
-    calib_images: int = 0  # board images for intrinsic calibration (calib/); 0: intrinsics.yaml
     shoulder: tuple[float, float, float] = (0.12, 0.58, 0.30)
     upper_arm_m: float = 0.31
     forearm_m: float = 0.27

@@ -3,6 +3,8 @@ flicker and sensor noise of the camera."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 # Qualisys frame -> W (to_world): the capture volume's axes are turned 90° about z from the
@@ -39,3 +41,20 @@ class CameraNoise:
     def __call__(self, t: float) -> tuple[float, np.ndarray]:
         gain = 1.0 + 0.03 * np.sin(2 * np.pi * 0.7 * t) + self.rng.normal(0, 0.005)
         return gain, self.pool[self.rng.integers(len(self.pool))]
+
+
+@dataclass(frozen=True)
+class CaptureSettings:
+    """What every simulated session sets: its length and seed, the camera, Qualisys."""
+
+    duration_s: float = 20.0
+    seed: int = 0
+    fps: float = 30.0
+    width: int = 640
+    height: int = 480
+    distortion: bool = True
+    qualisys_hz: float = 100.0
+    marker_noise_m: float = 0.0003
+    gt_gaps: int = 0  # number of 0.1-0.4 s gaps in a Qualisys marker
+    groundtruth_offset_s: float = -1.5  # session time = Qualisys time + offset
+    calib_images: int = 0  # board images for intrinsic calibration (calib/); 0: intrinsics.yaml

@@ -14,7 +14,12 @@ from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.simulate import hand, render
 from armtrack_cli.simulate.arm_session import BOARD
 from armtrack_cli.simulate.camera import charuco_board, default_camera, project
-from armtrack_cli.simulate.capture import CameraNoise, qualisys_markers, to_world_toml
+from armtrack_cli.simulate.capture import (
+    CameraNoise,
+    CaptureSettings,
+    qualisys_markers,
+    to_world_toml,
+)
 from armtrack_cli.simulate.render_hand import draw_hand
 
 CLUTTER_W = np.array([0.56, 0.02, 0.0])
@@ -22,21 +27,10 @@ COLOUR_HSV = ((100, 150, 60), (130, 255, 255))
 
 
 @dataclass(frozen=True)
-class PalmSimSettings:
+class PalmSimSettings(CaptureSettings):
     task: str = "wrist-rom"
-    duration_s: float = 20.0
-    seed: int = 0
-    fps: float = 30.0
-    width: int = 640
-    height: int = 480
-    distortion: bool = True
-    qualisys_hz: float = 100.0
-    marker_noise_m: float = 0.0003
-    gt_gaps: int = 0
     clutter: bool = True
     hide: tuple[tuple[int, float, float], ...] = ()  # (marker index, start s, duration s)
-    groundtruth_offset_s: float = -1.5
-    calib_images: int = 0  # board images for intrinsic calibration (calib/); 0: intrinsics.yaml
 
 
 @dataclass(frozen=True)

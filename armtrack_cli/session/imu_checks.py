@@ -1,0 +1,34 @@
+"""Checks every IMU reader shares: unit quaternions, and the rate and dropped samples of a
+stream from its times."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.core.errors import ImuFileError
+from armtrack_cli.core.streams import time_gaps
+
+NORM_TOLERANCE = 0.05
+
+
+def unit_quaternions(path: Path, q: np.ndarray, where: Callable[[int], str], what: str,
+                     hint: str) -> np.ndarray:
+    """Normalised q; an error naming the first row whose norm is off by more than 5 %
+    (a mislabelled or scaled column, not round-off). NaN rows stay NaN."""
+    norm = np.linalg.norm(q, axis=1)
+    bad = np.isfinite(norm) & (np.abs(norm - 1.0) > NORM_TOLERANCE)
+    if bad.any():
+        r = int(np.flatnonzero(bad)[0])
+        raise ImuFileError(path, f"{where(r)}: {what} has norm {norm[r]:.3f}, not 1", hint)
+    return quat.normalize(q)
+
+
+def rate_and_dropped(t: np.ndarray) -> tuple[float, int]:
+    """Nominal rate (1 / median step) and the samples missing in the gaps between times."""
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    gaps = time_gaps(t, dt)
+    return 1.0 / dt, int(np.sum(np.round(np.diff(t)[gaps] / dt) - 1))
