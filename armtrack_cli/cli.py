@@ -142,10 +142,7 @@ def detect(sessions, recipe, sets, as_json, out_dir) -> None:
     """The wrist patch in every frame (CamShift), or every palm-marker candidate blob,
     written to detections.csv."""
     for folder in _expand(sessions):
-        from armtrack_cli.session.config import load_session
-        from armtrack_cli.session.video import probe_video
-
-        n = probe_video(load_session(folder).camera.video).n_frames if not as_json else 0
+        n = pipeline.frame_count(folder) if not as_json else 0
         with _progress(n, f"detect {os.path.basename(str(folder).rstrip('/'))}",
                        quiet=as_json) as bar:
             r = pipeline.detect(folder, out=_out_for(out_dir, folder, sessions), recipe=recipe,
@@ -276,9 +273,6 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
              as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
-    from armtrack_cli.simulate.arm_session import ArmSimSettings
-    from armtrack_cli.simulate.palm_session import PalmSimSettings
-
     occ = []
     for spec in occlusions:
         try:
@@ -290,11 +284,11 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
     if task in ("wrist-rom", "reach-grasp"):
-        settings = PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
+        settings = pipeline.PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
                                    qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
                                    distortion=not no_distortion, calib_images=calib_images)
     else:
-        settings = ArmSimSettings(
+        settings = pipeline.ArmSimSettings(
             task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
             imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
             drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,

@@ -55,3 +55,10 @@ def _info_file(path: Path, imu_rate_hz: float | None) -> dict[str, Any]:
 format_info = session_info.format_text
 
 
+
+
+def frame_count(path: str | Path) -> int:
+    """Frames in a session's video (for progress bars)."""
+    session = load_session(path)
+    return probe_video(session.camera.video).n_frames if session.camera and \
+        session.camera.video else 0
