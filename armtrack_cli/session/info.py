@@ -153,6 +153,8 @@ def readiness(session: Session, have: set[str]) -> dict[str, str]:
     for name, req in needs.items():
         lack = [r for r in req if r not in have]
         out[name] = "ready" if not lack else "needs " + ", ".join(lack)
+    if out["ukf-palm"] == "ready":  # the data are there; the method is not in this version yet
+        out["ukf-palm"] = "data ready; the method is not in this version yet"
     return out
 
 
