@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from armtrack_cli.filters import gaussian as G
-from armtrack_cli.filters.particles import Particles, ess, moments, normalise, resample, reweight
+from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import SCHEMES
 
 
@@ -64,18 +64,19 @@ def test_particle_filter_matches_the_kalman_filter():
     rng = np.random.default_rng(7)
     N = 20000
     kf = G.Gaussian(np.zeros(n), np.eye(n))
-    p = Particles(rng.multivariate_normal(np.zeros(n), np.eye(n), N), np.full(N, -np.log(N)))
+    x = rng.multivariate_normal(np.zeros(n), np.eye(n), N)
+    w = np.full(N, 1.0 / N)
     Lq = np.linalg.cholesky(Q)
     Rinv = np.linalg.inv(R)
     for z in zs:
         kf = G.kf_update(G.kf_predict(kf, F, Q, b), z, H, R)
-        p = Particles(p.x @ F.T + b + rng.standard_normal((N, n)) @ Lq.T, p.logw)
+        x = x @ F.T + b + rng.standard_normal((N, n)) @ Lq.T
         if z is not None:
-            d = z - p.x @ H.T
-            p = reweight(p, -0.5 * np.einsum("ni,ij,nj->n", d, Rinv, d))
-        if ess(p) < N / 2:
-            p, _ = resample(p, "systematic", rng)
-        mean, cov = moments(p)
+            d = z - x @ H.T
+            w = weights(-0.5 * np.einsum("ni,ij,nj->n", d, Rinv, d), w)
+        if ess(w) < N / 2:
+            x, w = x[SCHEMES["systematic"](w, rng)], np.full(N, 1.0 / N)
+        mean, cov = moments(x, w)
         sd = np.sqrt(np.diag(cov))
         sigma = np.sqrt(np.diag(kf.P))
         assert np.all(np.abs(mean - kf.x) < 0.1 * sigma), (mean - kf.x) / sigma
@@ -110,6 +111,6 @@ def test_residual_keeps_the_integer_part_exactly():
         idx, minlength=4).tolist() == [2, 1, 1, 0]
 
 
-def test_normalise_handles_impossible_particles():
-    lw = normalise(np.array([-np.inf, -np.inf, -np.inf]))
-    np.testing.assert_allclose(np.exp(lw), 1 / 3)
+def test_weights_survive_impossible_and_tiny_likelihoods():
+    np.testing.assert_allclose(weights(np.array([-np.inf, -np.inf, -np.inf])), 1 / 3)
+    np.testing.assert_allclose(weights(np.array([-1e4, -1e4 - np.log(3)])), [0.75, 0.25])

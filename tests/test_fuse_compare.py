@@ -147,3 +147,15 @@ def test_fuse_and_compare_errors(sessions, tmp_path):
     r = run_cli("fuse", folder, "--set", "fuse.resampling=sistematic")
     assert r.exit_code == 1 and "did you mean 'systematic'?" in r.stderr
     assert not list(tmp_path.iterdir())
+    import shutil
+
+    shifted = tmp_path / "shifted"  # ground truth declared to start 1000 s later
+    shutil.copytree(folder, shifted)
+    toml = shifted / "session.toml"
+    toml.write_text(toml.read_text().replace("groundtruth_offset_s = -1.5",
+                                             "groundtruth_offset_s = 1000"))
+    before = (shifted / "armtrack" / "errors.csv").exists()
+    r = run_cli("compare", shifted)
+    assert r.exit_code == 1 and "does not overlap trajectory-" in r.stderr
+    assert "check [sync] groundtruth_offset_s" in r.stderr
+    assert (shifted / "armtrack" / "errors.csv").exists() == before

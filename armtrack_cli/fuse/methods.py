@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.filters import gaussian as G
+from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
 from armtrack_cli.fuse.models import Arm, Projection, Steps  # noqa: F401  (Steps: annotations)
 from armtrack_cli.fuse.settings import FuseSettings
@@ -73,18 +74,6 @@ def _predict_particles(x: np.ndarray, st: Steps, k: int, ace: np.ndarray,
                       v + st.dv[k] + c * eps[:, :3] + e * eps[:, 3:]])
 
 
-def _weights(loglik: np.ndarray) -> np.ndarray:
-    """Normalised weights from log-likelihoods of equally weighted particles (eq. 14)."""
-    w = np.exp(loglik - loglik.max())
-    return w / w.sum()
-
-
-def _moments(x: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    mean = w @ x
-    d = x - mean
-    return mean, (w[:, None] * d).T @ d
-
-
 def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
                   s: FuseSettings, arm: Arm | None, constrained: bool) -> Estimates:
     """Bootstrap PF (eqs. 12-14), or the layered-sampling PF of section III-E, steps 1-7.
@@ -110,9 +99,8 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
         z = inp.z[k] if seen[k] else None
         if z is not None:  # step 2: weights from the colour-tracking likelihood (eq. 11)
             d = proj(x[:, :3]) - z
-            loglik = -inv2s2 * np.einsum("ij,ij->i", d, d) + np.log(w)
-            w = _weights(loglik)
-        n_eff[k] = 1.0 / (w @ w)
+            w = weights(-inv2s2 * np.einsum("ij,ij->i", d, d), w)
+        n_eff[k] = ess(w)
         if constrained:
             if z is not None:  # step 3 (without a detection the weights are still equal)
                 x = x[resample(w, rng)]
@@ -123,12 +111,12 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             # 1 cm on the length residual |E − S| − L1 (≈ the squared form with σ = 2 L1 cm).
             dc = x[:, :3] - centres[k]
             r = np.sqrt(np.einsum("ij,ij->i", dc, dc)) - arm.L1
-            w = _weights(-inv2c2 * r * r)
-            mean[k], cov[k] = _moments(x, w)
+            w = weights(-inv2c2 * r * r)
+            mean[k], cov[k] = moments(x, w)
             x = x[resample(w, rng)]  # step 6
             w = np.full(N, 1.0 / N)
         else:
-            mean[k], cov[k] = _moments(x, w)
+            mean[k], cov[k] = moments(x, w)
             if n_eff[k] < s.pf_resample_ess * N:
                 x = x[resample(w, rng)]
                 w = np.full(N, 1.0 / N)

@@ -154,10 +154,6 @@ class Arm:
         """Eq. 2 with the contract's axis: the elbow is L2 behind the wrist along the forearm."""
         return p - self.L2 * quat.rotate(q_WB, self.forearm_B)
 
-    def upper_arm_residual(self, p: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
-        """|E − S| − L1 for wrist positions p (..., 3) (the length form of eq. 15)."""
-        return np.linalg.norm(self.elbow(p, q_WB) - self.shoulder, axis=-1) - self.L1
-
     def sphere_centres(self, q_WB: np.ndarray) -> np.ndarray:
         """(K, 3) S + L2 R_WB u per frame: |p − centre| = |E − S|, so the residual of eq. 15 is
         |p − centre| − L1 (computed once for all frames)."""
