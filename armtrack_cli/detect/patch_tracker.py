@@ -60,6 +60,7 @@ class PatchTracker:
         self.low, self.high, self.s = low, high, settings
         self.hist = hue_histogram(int(low[0]), int(high[0]))
         self.tracklets: list[Tracklet] = []
+        self.active: list[Tracklet] = []  # the live ones, in creation order
         self.n_frames = 0
 
     def step(self, frame_index: int, bgr: np.ndarray) -> None:
@@ -68,7 +69,7 @@ class PatchTracker:
         n, labels, stats, _ = cv2.connectedComponentsWithStats((bp > 0).astype(np.uint8), 8)
         claimed: dict[int, Tracklet] = {}
         h, w = bp.shape
-        for tr in (t for t in self.tracklets if t.alive):
+        for tr in self.active:
             rect, window = cv2.CamShift(bp, tr.window, TERM)
             (cx, cy), (rw, rh), ang = rect
             x, y, ww, wh = window
@@ -93,9 +94,6 @@ class PatchTracker:
         for lab in range(1, n):
             if lab in claimed or stats[lab, cv2.CC_STAT_AREA] < self.s.min_area_px:
                 continue
-            if any(t.alive and t.frames and t.frames[-1] == frame_index and labels[
-                    int(t.rects[-1][1]), int(t.rects[-1][0])] == lab for t in self.tracklets):
-                continue
             x, y, ww, wh = (int(v) for v in stats[lab, :4])
             rect, window = cv2.CamShift(bp, (x, y, ww, wh), TERM)
             (cx, cy), (rw, rh), ang = rect
@@ -106,6 +104,8 @@ class PatchTracker:
             tr.rects.append((cx, cy, rw, rh, ang))
             tr.masses.append(float(stats[lab, cv2.CC_STAT_AREA]))
             self.tracklets.append(tr)
+            self.active.append(tr)
+        self.active = [t for t in self.active if t.alive]
         self.n_frames = max(self.n_frames, frame_index + 1)
 
     def patch_tracklets(self, fps: float) -> list[Tracklet]:

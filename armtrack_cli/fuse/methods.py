@@ -11,7 +11,7 @@ import numpy as np
 from armtrack_cli.filters import gaussian as G
 from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
-from armtrack_cli.fuse.models import Arm, Projection, Steps  # noqa: F401  (Steps: annotations)
+from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.settings import FuseSettings
 
 

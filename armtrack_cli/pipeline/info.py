@@ -40,11 +40,7 @@ def _info_file(path: Path, imu_rate_hz: float | None) -> dict[str, Any]:
     if suffix == ".tsv":
         out["groundtruth"] = session_info.describe_markers(read_qualisys(path), 0.0)
     elif suffix in VIDEO_EXT:
-        v = probe_video(path)
-        out["video"] = {"file": v.path, "source": v.source, "frames": v.n_frames, "fps": v.fps,
-                        "width": v.width, "height": v.height,
-                        "duration_s": round(float(v.t[-1]), 4), "span_s": [0.0, float(v.t[-1])],
-                        "times_from": v.timestamps_from}
+        out["video"] = session_info.describe_video(probe_video(path))
     else:
         s = read_imu(path, rate_hz=imu_rate_hz)
         out["imu"] = session_info.describe_imu(s, 0.0)

@@ -307,11 +307,11 @@ def _palm(path: Path, table: Any) -> PalmConfig:
         sec.fail("markers", f"= {markers!r} names a marker twice")
     if "WRIST" not in markers:
         sec.fail("markers", f"= {markers!r} has no WRIST marker", "the hand frame H starts at WRIST")
-    links = sec.vector("link_m", len(markers), required=True) if isinstance(
-        sec.table.get("link_m"), list) and len(sec.table["link_m"]) == len(markers) else None
-    if links is None:
-        sec.fail("link_m", f"= {sec.table.get('link_m')!r} must give one length in metres per "
-                 f"marker ({len(markers)} markers)")
+    raw = sec.table.get("link_m")
+    if not (isinstance(raw, list) and len(raw) == len(markers)):
+        sec.fail("link_m", f"= {raw!r} must give one length in metres per marker "
+                 f"({len(markers)} markers)")
+    links = sec.vector("link_m", len(markers), required=True)
     if any(x < 0 or x > 0.3 for x in links):
         sec.fail("link_m", f"= {links} has a length outside 0..0.3 m",
                  "wrist-to-marker lengths are in metres")

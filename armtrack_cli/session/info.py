@@ -13,15 +13,15 @@ from typing import Any
 import numpy as np
 
 from armtrack_cli.core.errors import ConfigError
-from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, time_gaps
+from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStream, time_gaps
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session
+from armtrack_cli.session.images import IMAGE_EXT
 from armtrack_cli.session.imu import read_imu
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.video import probe_video
 
 METHODS_ARM = ("inertial", "ekf", "ukf", "pf", "pf-constraint")
-IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 
 
 def _span(t: np.ndarray, offset: float | str) -> list[float] | str:
@@ -43,6 +43,13 @@ def describe_imu(s: ImuSamples, offset: float | str) -> dict[str, Any]:
         "orientation": s.orientation_source, "magnetometer": s.mag is not None,
         "empty_channels": empty, "notes": list(s.notes),
     }
+
+
+def describe_video(v: VideoStream) -> dict[str, Any]:
+    end = float(v.t[-1]) if v.n_frames else 0.0
+    return {"file": v.path, "source": v.source, "frames": v.n_frames, "fps": round(v.fps, 4),
+            "width": v.width, "height": v.height, "duration_s": round(end, 4),
+            "span_s": [0.0, round(end, 6)], "times_from": v.timestamps_from}
 
 
 def describe_markers(m: MarkerTrajectories, offset: float | str) -> dict[str, Any]:
@@ -92,11 +99,7 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
         have.add("imu")
     cam = session.camera
     if cam is not None and cam.video is not None:
-        v = probe_video(cam.video)
-        out["video"] = {"file": v.path, "source": v.source, "frames": v.n_frames,
-                        "fps": round(v.fps, 4), "width": v.width, "height": v.height,
-                        "duration_s": round(float(v.t[-1]) if v.n_frames else 0.0, 4),
-                        "span_s": [0.0, round(float(v.t[-1]), 6)], "times_from": v.timestamps_from}
+        out["video"] = describe_video(probe_video(cam.video))
         have.add("video")
         depth = session.root / "depth"
         if depth.is_dir():
