@@ -16,6 +16,7 @@ import numpy as np
 
 from armtrack_cli import __version__, pipeline
 from armtrack_cli.core.errors import ArmtrackError
+from armtrack_cli.core.methods import BUILT
 
 
 class _Group(click.Group):
@@ -31,7 +32,7 @@ class _Group(click.Group):
             raise
         except KeyboardInterrupt:
             click.echo("error: interrupted", err=True)
-            ctx.exit(1)
+            ctx.exit(130)
         except Exception as exc:  # a bug of ours: still one line, traceback on request
             if os.environ.get("ARMTRACK_DEBUG"):
                 traceback.print_exc()
@@ -42,7 +43,9 @@ class _Group(click.Group):
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 out_option = click.option("--out", "out_dir", type=click.Path(file_okay=False),
-                          help="Write outputs here instead of SESSION/armtrack/.")
+                          help="Work folder: read earlier stages' outputs from it and write this "
+                          "stage's outputs to it; default SESSION/armtrack/ (with several "
+                          "sessions, DIR/SESSION_NAME/).")
 recipe_option = click.option("--recipe", help="Recipe name in recipes/ (e.g. default) or a TOML "
                              "path; settings resolve as defaults < recipe < --set.")
 set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
@@ -116,10 +119,10 @@ def calibrate(sessions, frame, markers, recipe, sets, as_json, out_dir) -> None:
     intrinsics.yaml or from board images in calib/), written to camera.yaml; for palm sessions
     also the palm model (palm.toml)."""
     px = _parse_pixels(markers) if markers else None
-    for folder in _expand(sessions):
-        r = pipeline.calibrate(folder, frame=frame, markers_px=px, out=_out_for(out_dir, folder,
-                                                                               sessions),
-                               recipe=recipe, sets=sets)
+
+    def work(folder, out):
+        r = pipeline.calibrate(folder, frame=frame, markers_px=px, out=out, recipe=recipe,
+                               sets=sets)
         lines = [f"{folder}: board in frame {r['frame']}: {r['corners']} corners, reprojection "
                  f"error {r['reprojection_error_px']:.3f} px",
                  f"  camera at {r['camera_position_m']} m in W -> {r['camera_yaml']}"]
@@ -129,7 +132,9 @@ def calibrate(sessions, frame, markers, recipe, sets, as_json, out_dir) -> None:
         if "palm_toml" in r:
             lines.append(f"  palm model -> {r['palm_toml']} (link residuals "
                          f"{r['palm_link_residual_cm']} cm)")
-        _emit(r, as_json, lines)
+        return r, lines
+
+    _each(sessions, out_dir, as_json, work)
 
 
 @main.command()
@@ -141,21 +146,23 @@ def calibrate(sessions, frame, markers, recipe, sets, as_json, out_dir) -> None:
 def detect(sessions, recipe, sets, as_json, out_dir) -> None:
     """The wrist patch in every frame (CamShift), or every palm-marker candidate blob,
     written to detections.csv."""
-    for folder in _expand(sessions):
+
+    def work(folder, out):
         n = pipeline.frame_count(folder) if not as_json else 0
         with _progress(n, f"detect {os.path.basename(str(folder).rstrip('/'))}",
                        quiet=as_json) as bar:
-            r = pipeline.detect(folder, out=_out_for(out_dir, folder, sessions), recipe=recipe,
-                                sets=sets, on_frame=bar)
+            r = pipeline.detect(folder, out=out, recipe=recipe, sets=sets, on_frame=bar)
         if r["kind"] == "patch":
             line = (f"{folder}: patch found in {r['ok_frames']} of {r['frames']} frames, "
                     f"{r['lost_spans']} losses (longest {r['longest_loss_s']} s)")
         else:
             line = f"{folder}: {r['blobs']} candidate blobs in {r['frames']} frames"
-        _emit(r, as_json, [line + f", {r['frames_per_s']:.0f} frames/s -> {r['detections']}"])
+        return r, [line + f", {r['frames_per_s']:.0f} frames/s -> {r['detections']}"]
+
+    _each(sessions, out_dir, as_json, work)
 
 
-METHOD_CHOICE = click.Choice(["inertial", "ekf", "ukf", "pf", "pf-constraint"])
+METHOD_CHOICE = click.Choice(list(BUILT))
 
 
 @main.command()
@@ -174,12 +181,14 @@ def fuse(sessions, recipe, method, particles, seed, sets, as_json, out_dir) -> N
     Without --method or --recipe the method is pf-constraint, Tao & Hu's layered particle
     filter with the arm-geometry constraint.
     """
-    for folder in _expand(sessions):
+    def work(folder, out):
         r = pipeline.fuse(folder, method=method, particles=particles, seed=seed, recipe=recipe,
-                          sets=sets, out=_out_for(out_dir, folder, sessions))
-        _emit(r, as_json, [f"{folder}: {r['method']}: {r['frames']} frames "
-                           f"({r['detections_used']} with a detection), "
-                           f"{r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"])
+                          sets=sets, out=out)
+        return r, [f"{folder}: {r['method']}: {r['frames']} frames "
+                   f"({r['detections_used']} with a detection), "
+                   f"{r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"]
+
+    _each(sessions, out_dir, as_json, work)
 
 
 @main.command()
@@ -191,17 +200,47 @@ def fuse(sessions, recipe, method, particles, seed, sets, as_json, out_dir) -> N
 def compare(sessions, methods, as_json, out_dir) -> None:
     """Trajectories scored against Qualisys: errors.csv (per method, joint and axis: mean,
     SD, RMSE, max, % within ±5 cm) and measures.csv; prints Tao & Hu's Table I."""
-    for folder in _expand(sessions):
-        r = pipeline.compare(folder, methods=tuple(methods),
-                             out=_out_for(out_dir, folder, sessions))
+    def work(folder, out):
+        r = pipeline.compare(folder, methods=tuple(methods), out=out)
         excl = {k: v for k, v in r["excluded_frames"].items() if v}
         lines = [f"{folder}:", r["table"]]
         if excl:
             lines.append("frames without ground truth (gaps), excluded: " +
                          ", ".join(f"{k} {v}" for k, v in excl.items()))
         lines.append(f"-> {r['errors']}, {r['measures']}")
-        r = {k: v for k, v in r.items() if k not in ("rows", "table")}
-        _emit(r, as_json, lines)
+        return {k: v for k, v in r.items() if k not in ("rows", "table")}, lines
+
+    _each(sessions, out_dir, as_json, work)
+
+
+def _each(sessions, out_dir, as_json: bool, work) -> None:
+    """Run ``work(folder, out) -> (result, lines)`` on every session. One session: its error
+    propagates (one line, exit 1). Several: a failure is one ``error:`` line and the others go
+    on; a summary line at the end; exit 1 if any failed."""
+    folders = _expand(sessions)
+    if len(folders) == 1:
+        result, lines = work(folders[0], _out_for(out_dir, folders[0], sessions))
+        _emit(result, as_json, lines)
+        return
+    outcomes, failed = [], 0
+    for folder in folders:
+        try:
+            result, lines = work(folder, _out_for(out_dir, folder, sessions))
+        except ArmtrackError as exc:
+            failed += 1
+            click.echo(f"error: {exc}", err=True)
+            outcomes.append({"session": folder, "status": "failed", "error": str(exc)})
+            continue
+        if not as_json:
+            click.echo("\n".join(lines))
+        outcomes.append({"session": folder, "status": "done", **result})
+    summary = f"{len(folders)} sessions: {len(folders) - failed} done, {failed} failed"
+    if as_json:
+        click.echo(json.dumps({"sessions": outcomes, "summary": summary}, indent=2, sort_keys=True))
+    else:
+        click.echo(summary)
+    if failed:
+        raise click.exceptions.Exit(1)
 
 
 def _expand(items) -> list[str]:

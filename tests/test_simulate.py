@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from armtrack_cli import pipeline
-from armtrack_cli.calibrate.board_pose import board_pose, make_board
+from armtrack_cli.calibrate.board_pose import board_pose
 from armtrack_cli.core import quaternion as Q
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import load_session
@@ -18,6 +18,7 @@ from armtrack_cli.session.qualisys import read_qualisys, to_world
 from armtrack_cli.session.video import iter_frames, probe_video
 from armtrack_cli.simulate import imu_model, kinematics
 from armtrack_cli.simulate.arm_session import ArmSimSettings
+from armtrack_cli.vision.charuco import make_board
 
 from .conftest import run_cli
 

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-METHODS = ("inertial", "ekf", "ukf", "pf", "pf-constraint")
+from armtrack_cli.core.methods import DEFAULT_METHOD
+
 SMOOTHERS = ("rts", "none")
 
 
 @dataclass(frozen=True)
 class FuseSettings:
-    method: str = "pf-constraint"
+    method: str = DEFAULT_METHOD
     particles: int = 500  # Tao & Hu IV-A
     resampling: str = "residual"  # Tao & Hu III-E ("standard residual resampling")
     pixel_sigma: float = 4.0  # px, Tao & Hu III-B

@@ -10,7 +10,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from armtrack_cli.calibrate.board_pose import MIN_CORNERS, board_pose, make_board
+from armtrack_cli.calibrate.board_pose import board_pose
 from armtrack_cli.calibrate.intrinsics import calibrate_intrinsics
 from armtrack_cli.calibrate.palm_model import PalmFit, label_palm
 from armtrack_cli.core.errors import CalibrationError
@@ -24,6 +24,7 @@ from armtrack_cli.session.images import read_images
 from armtrack_cli.session.outputs import write_text
 from armtrack_cli.session.recipe import section
 from armtrack_cli.session.video import probe_video, read_frame
+from armtrack_cli.vision.charuco import MIN_CORNERS, make_board
 
 HAND_HEIGHT_M = 0.035  # back of a hand lying flat, above the table, when there is no depth
 
@@ -54,7 +55,7 @@ def lift_pixels(cam: CameraModel, px: np.ndarray, depth: np.ndarray | None) -> n
     on the plane of the back of a hand lying on the table."""
     n = cv2.undistortPoints(px.reshape(-1, 1, 2).astype(np.float64), cam.K, cam.dist).reshape(-1, 2)
     rays = np.c_[n, np.ones(len(n))]
-    eye = -cam.R_WC.T @ cam.T_WC
+    eye = cam.centre_W
     out = np.empty((len(px), 3))
     for i, (r, (u, v)) in enumerate(zip(rays, px)):
         z = np.nan
@@ -85,7 +86,7 @@ def _palm(session: Session, cam: CameraModel, image: np.ndarray, frame: int,
     dpath = depth_path(session.root, frame)
     depth = read_depth_png(dpath) if dpath.exists() else None
     pts = lift_pixels(cam, px, depth)
-    eye = -cam.R_WC.T @ cam.T_WC
+    eye = cam.centre_W
     fit = label_palm(pts, p.markers, p.link_m, side=session.meta.side, camera_W=eye)
     if fit is None or np.abs(fit.link_residual_m).max() > 0.02:
         worst = "" if fit is None else f" (a link is off by {np.abs(fit.link_residual_m).max() * 100:.1f} cm)"

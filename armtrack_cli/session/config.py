@@ -7,7 +7,6 @@ naming the key, what was seen and how to fix it.
 from __future__ import annotations
 
 import datetime as _dt
-import difflib
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core.errors import ConfigError, did_you_mean
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -123,6 +122,15 @@ class Session:
     groundtruth: GroundTruthConfig | None
     sync: SyncConfig
 
+    def offset_s(self, key: str) -> float:
+        """[sync] ``key`` (imu_offset_s or groundtruth_offset_s) in seconds: session time =
+        stream time + offset. "auto" (estimating it from the data) is refused until built."""
+        value = getattr(self.sync, key)
+        if isinstance(value, str):
+            raise ConfigError(self.toml_path, f'[sync] {key} = "auto" is not supported yet',
+                              "write the offset in seconds (session time = stream time + offset)")
+        return value
+
     @property
     def kind(self) -> str:
         """'palm' for Cordella marker sessions, 'arm' with an arm model, else 'object'."""
@@ -149,9 +157,8 @@ class _Section:
         self.used: set[str] = set()
         for k in table:  # unknown keys first: a typo must not surface as "missing"
             if k not in keys:
-                close = difflib.get_close_matches(k, keys, n=1)
-                self.fail(k, "is not a key armtrack knows", f"did you mean {close[0]!r}?" if close
-                          else f"valid keys are {', '.join(keys)}")
+                self.fail(k, "is not a key armtrack knows",
+                          did_you_mean(k, keys, what="valid keys"))
 
     def key(self, key: str | None) -> str:
         return f"[{self.name}]" if key is None else f"[{self.name}] {key}"
@@ -190,9 +197,8 @@ class _Section:
         if not isinstance(v, str):
             self.fail(key, f"= {v!r} is {_describe(v)}, expected a string")
         if choices is not None and v not in choices:
-            close = difflib.get_close_matches(v, choices, n=1)
             self.fail(key, f"= {v!r} is not one of {', '.join(map(repr, choices))}",
-                      f"did you mean {close[0]!r}?" if close else None)
+                      did_you_mean(v, choices))
         return v
 
     def vector(self, key: str, n: int, *, required=False, integer=False) -> list | None:
@@ -330,9 +336,8 @@ def _groundtruth(path: Path, root: Path, table: Any, palm: PalmConfig | None) ->
         sec.fail("markers", f"is {_describe(markers)}, expected {{ wrist = \"R_WRI\", … }}")
     for role, name in markers.items():
         if role not in roles:
-            close = difflib.get_close_matches(role, roles, n=1)
             sec.fail(f"markers.{role}", "is not a joint armtrack scores",
-                     f"did you mean {close[0]!r}?" if close else f"use one of {', '.join(roles)}")
+                     did_you_mean(role, roles, what="joints"))
         if not isinstance(name, str) or not name:
             sec.fail(f"markers.{role}", f"= {name!r} is not a marker name")
     tw = sec.get("to_world", default=np.eye(4).tolist())
@@ -395,10 +400,8 @@ def load_session(folder: str | Path) -> Session:
         raise ConfigError(path, f"is not valid TOML: {exc}") from None
     for name in doc:
         if name not in SECTIONS:
-            close = difflib.get_close_matches(name, SECTIONS, n=1)
             raise ConfigError(path, f"[{name}] is not a section armtrack knows",
-                              f"did you mean [{close[0]}]?" if close else
-                              f"sections are {', '.join(SECTIONS)}")
+                              did_you_mean(name, SECTIONS, what="sections", form="[{}]"))
     meta = _meta(path, root, doc.get("session", {}))
     arm = _arm(path, doc["arm"]) if "arm" in doc else None
     camera = _camera(path, root, doc["camera"]) if "camera" in doc else None

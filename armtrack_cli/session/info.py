@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core.methods import BUILT, NEEDS
 from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStream, time_gaps
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session
@@ -20,8 +21,6 @@ from armtrack_cli.session.images import IMAGE_EXT
 from armtrack_cli.session.imu import read_imu
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.video import probe_video
-
-METHODS_ARM = ("inertial", "ekf", "ukf", "pf", "pf-constraint")
 
 
 def _span(t: np.ndarray, offset: float | str) -> list[float] | str:
@@ -147,17 +146,12 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
 
 def readiness(session: Session, have: set[str]) -> dict[str, str]:
     """For each command/method: 'ready' or what the session still lacks."""
-    camera = ["video", "intrinsics", "board"]
-    needs = {m: ["imu", *camera, "patch"] for m in METHODS_ARM}
-    needs["pf-constraint"].append("arm")
-    needs["ukf-palm"] = [*camera, "palm", "depth"]
-    needs["compare"] = ["groundtruth"]
     out = {}
-    for name, req in needs.items():
+    for name, req in {**NEEDS, "compare": ("groundtruth",)}.items():
         lack = [r for r in req if r not in have]
         out[name] = "ready" if not lack else "needs " + ", ".join(lack)
-    if out["ukf-palm"] == "ready":  # the data are there; the method is not in this version yet
-        out["ukf-palm"] = "data ready; the method is not in this version yet"
+        if name in NEEDS and name not in BUILT and not lack:
+            out[name] = "data ready; the method is not in this version yet"
     return out
 
 
