@@ -21,14 +21,9 @@ setup: $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/armtrack info $(DEMO)
-	$(BIN)/armtrack calibrate $(DEMO) --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack detect $(DEMO) --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack fuse $(DEMO) --method ekf --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack fuse $(DEMO) --method pf-constraint --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack compare $(DEMO) --out $(DEMO_OUT)/circle-01
+	$(BIN)/armtrack run $(DEMO) --method ekf --method pf-constraint --out $(DEMO_OUT)/circle-01
 	$(BIN)/armtrack info sample_sessions/wrist-rom-01
-	$(BIN)/armtrack calibrate sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01
-	$(BIN)/armtrack detect sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01
+	$(BIN)/armtrack run sample_sessions/reach-01 sample_sessions/wrist-rom-01 --out $(DEMO_OUT)
 	@echo "demo: outputs in $(DEMO_OUT)/"
 
 samples: $(STAMP)

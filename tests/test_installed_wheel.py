@@ -27,9 +27,13 @@ def _run(cmd, cwd, env=None):
 
 
 def test_wheel_in_a_fresh_venv_runs_a_session_from_another_folder(tmp_path):
-    wheels = tmp_path / "wheels"
+    src, wheels = tmp_path / "src", tmp_path / "wheels"  # built from a copy: no build/ left here
+    shutil.copytree(REPO / "armtrack_cli", src / "armtrack_cli",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(REPO / name, src / name)
     _run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation",
-          "-w", wheels, REPO], cwd=tmp_path)
+          "-w", wheels, src], cwd=tmp_path)
     (wheel,) = wheels.glob("armtrack-*.whl")
     env_dir = tmp_path / "venv"
     venv.create(env_dir, with_pip=True)

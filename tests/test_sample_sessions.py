@@ -80,7 +80,7 @@ def test_the_comparison_fails_loudly_on_a_perturbed_value(tmp_path):
 
 
 def test_the_mcap_comparison_sees_one_changed_float(tmp_path):
-    from armtrack_cli.session.export_mcap import write_imu_mcap
+    from armtrack_cli.session.export.mcap import write_imu_mcap
 
     t = np.arange(50) / 100.0
     acc = np.tile([0.0, 0.0, 9.81], (50, 1))

@@ -17,6 +17,13 @@ from armtrack_cli.vision.charuco import B_TO_W, MIN_CORNERS
 
 
 @dataclass(frozen=True)
+class CalibrateSettings:
+    """Recipe section [calibrate]."""
+
+    max_error_px: float = 2.0  # board reprojection error above this is refused
+
+
+@dataclass(frozen=True)
 class BoardPose:
     R_WC: np.ndarray  # (3, 3), X_C = R_WC X_W + T_WC
     T_WC: np.ndarray  # (3,) m

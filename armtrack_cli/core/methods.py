@@ -15,3 +15,4 @@ NEEDS = {
     "pf-constraint": ("imu", *_CAMERA, "patch", "arm"),
     "ukf-palm": (*_CAMERA, "palm", "depth"),
 }
+DEFAULT_FOR_KIND = {"arm": "pf-constraint", "object": "ukf", "palm": "ukf-palm"}

@@ -10,11 +10,11 @@ import numpy as np
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.session.camera_yaml import write_camera_yaml
 from armtrack_cli.session.depth import depth_path, write_depth_png
-from armtrack_cli.session.export_imu_csv import write_imu_csv
-from armtrack_cli.session.export_mcap import write_imu_mcap
-from armtrack_cli.session.export_qualisys import write_qtm_tsv
-from armtrack_cli.session.export_video import write_video
-from armtrack_cli.session.export_xsens import write_mt_manager
+from armtrack_cli.session.export.imu_csv import write_imu_csv
+from armtrack_cli.session.export.mcap import write_imu_mcap
+from armtrack_cli.session.export.qualisys import write_qtm_tsv
+from armtrack_cli.session.export.video import write_video
+from armtrack_cli.session.export.xsens import write_mt_manager
 from armtrack_cli.session.images import write_image
 from armtrack_cli.session.outputs import staged_folder, write_npz, write_text
 from armtrack_cli.simulate import palm_session

@@ -43,17 +43,24 @@ def recipe_names() -> list[str]:
     return sorted({p.stem for d in recipe_dirs() if d.is_dir() for p in d.glob("*.toml")})
 
 
+def recipe_file(recipe: str | None) -> Path | None:
+    """The file a recipe name or path resolves to (None for none, or one not found)."""
+    if recipe is None:
+        return None
+    if Path(recipe).is_file():
+        return Path(recipe)
+    return next((d / f"{recipe}.toml" for d in recipe_dirs() if (d / f"{recipe}.toml").is_file()),
+                None)
+
+
 def load_recipe(recipe: str | None) -> tuple[dict[str, Any], str]:
     """(nested dict, where it came from) for a recipe name or path; ({}, "defaults") for None."""
     if recipe is None:
         return {}, "defaults"
-    path = Path(recipe)
-    if not path.is_file():
-        found = [d / f"{recipe}.toml" for d in recipe_dirs() if (d / f"{recipe}.toml").is_file()]
-        if not found:
-            raise ConfigError(recipe, "is neither a recipe file nor a recipe name",
-                              did_you_mean(recipe, recipe_names(), what="recipes"))
-        path = found[0]
+    path = recipe_file(recipe)
+    if path is None:
+        raise ConfigError(recipe, "is neither a recipe file nor a recipe name",
+                          did_you_mean(recipe, recipe_names(), what="recipes"))
     try:
         return tomllib.loads(path.read_text()), str(path)
     except tomllib.TOMLDecodeError as exc:

@@ -38,3 +38,11 @@ def read_patch_detections(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def read_trajectory(path: Path) -> pd.DataFrame:
     return read_csv_table(path, ("t", "wrist_x", "wrist_y", "wrist_z"),
                           "run `armtrack fuse SESSION --method M` first")
+
+
+def read_kinematics(path: Path) -> dict[str, float]:
+    """kinematics-METHOD.csv as {measure: value} (NaN where the cell is empty)."""
+    df = read_csv_table(path, ("measure", "value", "unit"),
+                        "run `armtrack fuse SESSION --method M` first")
+    return {str(k): float(v) for k, v in zip(df["measure"], pd.to_numeric(df["value"],
+                                                                        errors="coerce"))}
