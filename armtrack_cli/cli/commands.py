@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import os
-import sys
 import traceback
 
 import click
@@ -318,6 +317,3 @@ def render_reference() -> str:
         parts += [f"## armtrack {name}", "", "```", cmd.get_help(ctx), "```", ""]
     return "\n".join(parts)
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -1,0 +1,7 @@
+"""`python -m armtrack_cli …` runs the command line."""
+
+import sys
+
+from armtrack_cli.cli import main
+
+sys.exit(main())
