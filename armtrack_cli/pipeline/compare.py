@@ -10,13 +10,13 @@ import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, error_rows, table_one, truth_at
 from armtrack_cli.core.errors import ConfigError, DataError
-from armtrack_cli.core.measures import MEASURES, measures
 from armtrack_cli.fuse.settings import METHODS
 from armtrack_cli.pipeline.common import out_dir
+from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
 from armtrack_cli.session.config import load_session, require
 from armtrack_cli.session.outputs import write_table
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
-from armtrack_cli.session.tables import read_trajectory
+from armtrack_cli.session.tables import read_kinematics, read_trajectory
 
 
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
@@ -44,29 +44,19 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
             raise DataError(gt.file, f"does not overlap trajectory-{m}.csv in time (Qualisys "
                             f"{t_q[0]:.2f}…{t_q[-1]:.2f} s, trajectory {t[0]:.2f}…{t[-1]:.2f} s on "
                             "the session clock)", "check [sync] groundtruth_offset_s")
-        truths = {}
+        truths = {role: truth_at(t, t_q, to_world(qtm.xyz[:, c], gt.to_world), qtm.rate_hz)
+                  for role, c in cols.items()}
         for joint in ("wrist", "elbow", "shoulder"):
             if joint not in cols or f"{joint}_x" not in traj:
                 continue
-            xyz = to_world(qtm.xyz[:, cols[joint]], gt.to_world)
-            tr = truth_at(t, t_q, xyz, qtm.rate_hz)
-            truths[joint] = tr
+            tr = truths[joint]
             est = traj[[f"{joint}_x", f"{joint}_y", f"{joint}_z"]].to_numpy()
             excluded[f"{m}/{joint}"] = int((np.isfinite(est).all(axis=1)
                                              & ~np.isfinite(tr).all(axis=1)).sum())
             rows += error_rows(m, joint, est, tr)
-        if "wrist" in truths:
-            sh = session.arm.shoulder_m if session.arm is not None else None
-            est_m = measures(t, traj[["wrist_x", "wrist_y", "wrist_z"]].to_numpy(),
-                             elbow=traj[["elbow_x", "elbow_y", "elbow_z"]].to_numpy()
-                             if "elbow_x" in traj else None, shoulder=sh)
-            ok = np.isfinite(traj["wrist_x"].to_numpy())
-            tr_w = np.where(ok[:, None], truths["wrist"], np.nan)
-            tr_e = truths.get("elbow")
-            tr_m = measures(t, tr_w, elbow=tr_e, shoulder=sh)
-            for k, unit in MEASURES.items():
-                mrows.append({"method": m, "measure": k, "unit": unit, "estimate": est_m[k],
-                              "truth": tr_m[k], "difference": est_m[k] - tr_m[k]})
+        est_in = trajectory_inputs(traj, session)
+        mrows += measure_comparison(m, read_kinematics(dest / f"kinematics-{m}.csv"),
+                                    truth_inputs(est_in, session, truths))
     table = pd.DataFrame(rows, columns=list(COLUMNS))
     write_table(dest / "errors.csv", table, command="compare",
                 settings={"methods": list(methods), "excluded_frames": excluded})

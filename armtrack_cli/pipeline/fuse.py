@@ -13,11 +13,11 @@ import pandas as pd
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
-from armtrack_cli.core.measures import MEASURES, measures
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import METHODS, SMOOTHERS, FuseSettings
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.kinematics import kinematics_table
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
@@ -115,7 +115,9 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     name = f"trajectory-{s.method}.csv"
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how}
     write_table(dest / name, table, command="fuse", settings=settings)
-    kin = kinematics_table(table, session)
+    q_WB = np.full((t_f.size, 4), np.nan)
+    q_WB[frames] = inp.q_WB
+    kin = kinematics_table(table, session, q_WB=q_WB)
     write_table(dest / f"kinematics-{s.method}.csv", kin, command="fuse", settings=settings)
     return {"method": s.method, "trajectory": str(dest / name), "frames": int(frames.size),
             "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),
@@ -152,12 +154,3 @@ def trajectory_table(t_f, frames, est, inp: Inputs, arm) -> pd.DataFrame:
         e[frames] = est.ess
         cols["ess"] = e
     return pd.DataFrame(cols)
-
-
-def kinematics_table(traj: pd.DataFrame, session: Session) -> pd.DataFrame:
-    wrist = traj[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
-    elbow = traj[["elbow_x", "elbow_y", "elbow_z"]].to_numpy() if "elbow_x" in traj else None
-    shoulder = session.arm.shoulder_m if session.arm is not None else None
-    m = measures(traj["t"].to_numpy(), wrist, elbow=elbow, shoulder=shoulder)
-    return pd.DataFrame({"measure": list(m), "value": list(m.values()),
-                         "unit": [MEASURES[k] for k in m]})

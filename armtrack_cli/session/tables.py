@@ -38,3 +38,19 @@ def read_patch_detections(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def read_trajectory(path: Path) -> pd.DataFrame:
     return read_csv_table(path, ("t", "wrist_x", "wrist_y", "wrist_z"),
                           "run `armtrack fuse SESSION --method M` first")
+
+
+def read_kinematics(path: Path) -> pd.DataFrame:
+    """kinematics-METHOD.csv: value cells stay text (a number or "not computable: why")."""
+    if not path.is_file():
+        raise DataError(path, "not found", "run `armtrack fuse SESSION` first")
+    try:
+        df = pd.read_csv(path, dtype={"value": str, "segment": str}, keep_default_na=False)
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise DataError(path, f"is not a readable CSV ({exc})") from None
+    missing = [c for c in ("measure", "segment", "value", "sd", "unit") if c not in df.columns]
+    if missing:
+        raise DataError(path, f"lacks column(s) {', '.join(missing)}",
+                        "rerun `armtrack fuse SESSION` (an older armtrack wrote it)")
+    df["sd"] = pd.to_numeric(df["sd"], errors="coerce")
+    return df
