@@ -35,10 +35,11 @@ def shoulder_angles_deg(shoulder: np.ndarray, elbow: np.ndarray, side: str,
     u = thorax_from_world(u / np.linalg.norm(u, axis=-1, keepdims=True), side)
     elev = np.degrees(np.arccos(np.clip(-u[..., 1], -1, 1)))
     plane = np.degrees(np.arctan2(u[..., 0], u[..., 2]))  # u = (sinθ sinα, −cosθ, sinθ cosα)
-    ok = np.isfinite(plane)
-    if ok.any():
+    ok = np.isfinite(plane) & (elev >= s.plane_min_elevation_deg)
+    plane = np.where(ok, plane, np.nan)
+    if ok.any():  # continuous through ±180° over the frames where the plane is defined
         plane[ok] = np.degrees(np.unwrap(np.radians(plane[ok])))
-    return elev, np.where(elev >= s.plane_min_elevation_deg, plane, np.nan)
+    return elev, plane
 
 
 def neutral_quaternion(t: np.ndarray, q: np.ndarray, s: Settings) -> np.ndarray:
