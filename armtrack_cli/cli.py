@@ -204,6 +204,20 @@ def compare(sessions, methods, as_json, out_dir) -> None:
         _emit(r, as_json, lines)
 
 
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="The PDF to write "
+              "(default: report.pdf in the work folder of the latest session).")
+@json_option
+@out_option
+def report(sessions, output, as_json, out_dir) -> None:
+    """The clinician PDF (A4): page 1 in plain words, trajectories, accuracy against the
+    reference, wrist angles; several sessions of one subject add their progress."""
+    folders = _expand(sessions)
+    r = pipeline.report([(f, _out_for(out_dir, f, sessions)) for f in folders], output=output)
+    _emit(r, as_json, [f"{', '.join(r['sessions'])} -> {r['report']}"])
+
+
 def _expand(items) -> list[str]:
     """Session folders: each argument, or the session folders inside a folder of sessions."""
     out = []

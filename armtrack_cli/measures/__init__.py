@@ -15,8 +15,8 @@ A measure that cannot be computed raises ``NotComputable(why)``; ``table`` turns
 "not computable: why" cell, never a number. docs/measures.md defines every measure.
 """
 
-from armtrack_cli.measures.base import NotComputable, Settings
 from armtrack_cli.measures import angles, path, smoothness
+from armtrack_cli.measures.base import NotComputable, Settings
 from armtrack_cli.measures.table import CATALOGUE, Inputs, measure_rows
 
 __all__ = ["NotComputable", "Settings", "CATALOGUE", "Inputs", "measure_rows", "angles", "path",

@@ -59,5 +59,5 @@ def movement_units(t: np.ndarray, v: np.ndarray, s: Settings = DEFAULT) -> tuple
     so a ripple on a rising flank, which the speed soon exceeds, is not a unit."""
     v = _check(v, 1.0)
     dist = max(1, int(np.ceil(s.mu_min_gap_s / np.median(np.diff(t)) - 1e-9)))
-    peaks, _ = find_peaks(np.r_[0.0, v, 0.0], prominence=s.mu_rise, distance=dist)
-    return int(peaks.size), peaks - 1
+    peaks, _ = find_peaks(v, prominence=s.mu_rise, distance=dist)
+    return int(peaks.size), peaks

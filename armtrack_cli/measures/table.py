@@ -173,7 +173,9 @@ def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None
     support one); t_start, t_end the segment's window in session time (s). Given windows
     (e.g. the estimate's, for the ground truth), the segments are those."""
     vals, windows = values(inp, s, windows)
-    sds = _uncertainty(inp, [k for k, v in vals.items() if not isinstance(v, str)], windows, s)
+    fixed = ("segments",) + tuple(f"forearm_pronation_{k}" for k in ("rom", "rom_p5_p95", "min", "max"))
+    sds = _uncertainty(inp, [k for k, v in vals.items() if not isinstance(v, str)
+                             and k[0] not in fixed], windows, s)  # no posterior for these
     order = {k: i for i, k in enumerate(CATALOGUE)}
     keys = sorted(vals, key=lambda k: (k[1] != "session", int(k[1]) if k[1].isdigit() else 0,
                                        order[k[0]]))

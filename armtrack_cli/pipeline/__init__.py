@@ -21,9 +21,10 @@ from armtrack_cli.pipeline.compare import compare
 from armtrack_cli.pipeline.detect import detect
 from armtrack_cli.pipeline.fuse import fuse
 from armtrack_cli.pipeline.info import format_info, frame_count, info
+from armtrack_cli.pipeline.report import report
 from armtrack_cli.pipeline.simulate import simulate, simulate_command
 from armtrack_cli.simulate.arm_session import ArmSimSettings
 from armtrack_cli.simulate.palm_session import PalmSimSettings
 
 __all__ = ["info", "format_info", "frame_count", "calibrate", "detect", "fuse", "compare",
-           "simulate", "simulate_command", "ArmSimSettings", "PalmSimSettings"]
+           "report", "simulate", "simulate_command", "ArmSimSettings", "PalmSimSettings"]
