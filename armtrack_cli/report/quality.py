@@ -25,8 +25,10 @@ def verdict(r: SessionReport) -> tuple[str, list[str]]:
     """("good" | "usable with care" | "not usable", reasons in plain words)."""
     q = r.quality
     bad, care = [], []
-    if r.trajectory is None:
+    if r.trajectory is None and not r.notes:
         bad.append("no movement estimate in this work folder")
+    if r.trajectory is None:
+        bad += list(r.notes)
     if math.isfinite(q.tracked_pct):
         if q.tracked_pct < 50:
             bad.append(f"the camera found the wrist in only {q.tracked_pct:.0f} % of frames")
@@ -49,7 +51,8 @@ def verdict(r: SessionReport) -> tuple[str, list[str]]:
         bad.append(f"wrist error against the reference {rmse:.1f} cm RMS (over 10 cm)")
     elif rmse is not None and rmse > 5:
         care.append(f"wrist error against the reference {rmse:.1f} cm RMS (over 5 cm)")
-    care += list(r.notes)
+    if r.trajectory is not None:
+        care += list(r.notes)
     if bad:
         return "not usable", bad + care
     return ("usable with care", care) if care else ("good", [])

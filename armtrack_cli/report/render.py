@@ -25,11 +25,12 @@ def session_pages(r: SessionReport) -> list:
 
 
 def render(reports: list[SessionReport]) -> bytes:
-    """The PDF of one session, or of several of one subject (progress first, then each)."""
+    """The PDF of one session, or of several of one subject (progress first, then the first
+    page of each)."""
     plt = layout.setup()
     from matplotlib.backends.backend_pdf import PdfPages
 
-    from armtrack_cli.report import progress
+    from armtrack_cli.report import progress, summary
 
     reports = sorted(reports, key=lambda r: (r.date or "", r.session_id))
     planned = []  # (header text, title, draw)
@@ -37,9 +38,10 @@ def render(reports: list[SessionReport]) -> bytes:
         span = f"{reports[0].day} to {reports[-1].day}"
         left = f"Subject {reports[0].subject} · {len(reports)} sessions, {span}"
         planned += [(left, t, d) for t, d in progress.pages(reports)]
-    for r in reports:
+    for r in reports:  # several sessions: each one's first page (its own report has the rest)
         left = f"Subject {r.subject} · session of {r.day} ({r.session_id})"
-        planned += [(left, t, d) for t, d in session_pages(r)]
+        pages = session_pages(r) if len(reports) == 1 else [summary.page_one(r)]
+        planned += [(left, t, d) for t, d in pages]
     buf = io.BytesIO()
     meta = {"Title": f"Movement report, subject {reports[0].subject}", "Creator": "armtrack",
             "CreationDate": None, "ModDate": None}  # no clock: same inputs, same bytes
