@@ -126,12 +126,16 @@ def test_the_first_page_says_who_what_and_the_verdict(arm):
 
 def _synthetic_palm(work, seed=7):
     """trajectory-ukf-palm.csv from the exact truth of wrist-rom-01: angles + 0.5° noise,
-    WRIST marker + 1 mm noise, with SD columns."""
+    WRIST marker + 1 mm noise, both smoothed over 0.5 s (a filter's errors are smooth), with
+    SD columns."""
     tr = dict(np.load(SAMPLES / "wrist-rom-01.truth.npz"))
     rng = np.random.default_rng(seed)
     t = tr["frame_t"]
-    ang = tr["frame_angles_deg"] + rng.normal(0, 0.5, (t.size, 3))
-    w = tr["frame_wrist"] + rng.normal(0, 0.001, (t.size, 3))
+    smooth = lambda sd: np.apply_along_axis(  # noqa: E731
+        lambda x: np.convolve(x, np.ones(15) / np.sqrt(15), "same"), 0,
+        rng.normal(0, sd, (t.size, 3)))
+    ang = tr["frame_angles_deg"] + smooth(0.5)
+    w = tr["frame_wrist"] + smooth(0.001)
     cols = {"t": t, **{f"wrist_{a}": w[:, k] for k, a in enumerate("xyz")},
             **{f"wrist_{a}_sd": np.full(t.size, 0.001) for a in "xyz"},
             "flexion_deg": ang[:, 0], "deviation_deg": ang[:, 1], "pronation_deg": ang[:, 2],

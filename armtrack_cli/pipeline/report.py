@@ -22,7 +22,7 @@ from armtrack_cli.session.imu import read_imu
 from armtrack_cli.session.info import describe_imu
 from armtrack_cli.session.outputs import write_bytes
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
-from armtrack_cli.session.tables import read_csv_table, read_kinematics, read_trajectory
+from armtrack_cli.session.tables import read_csv_table, read_kinematics, read_measures, read_trajectory
 
 PREFERENCE = {"palm": ("ukf-palm",), "arm": ("pf-constraint", "pf", "ukf", "ekf", "inertial"),
               "object": ("pf", "ukf", "ekf", "inertial")}
@@ -101,11 +101,8 @@ def gather(path: str | Path, out: str | Path | None = None) -> SessionReport:
     if (dest / "errors.csv").is_file():
         errors = read_csv_table(dest / "errors.csv", ("method", "joint", "axis"), "")
     if method and (dest / "measures.csv").is_file():
-        m = pd.read_csv(dest / "measures.csv", dtype={"estimate": str, "truth": str,
-                                                       "segment": str}, keep_default_na=False)
+        m = read_measures(dest / "measures.csv")
         m = m[m["method"] == method]
-        for c in ("error", "error_pct", "estimate_sd"):
-            m[c] = pd.to_numeric(m[c], errors="coerce")
         measures = m if len(m) else None
     meta = session.meta
     return SessionReport(

@@ -34,7 +34,6 @@ def page(r: SessionReport):
             a.plot(t, x, **st)
             if np.isfinite(x).any():
                 lo, hi = np.nanmin(x), np.nanmax(x)
-                a.axhspan(lo, hi, **layout.BAND)
                 a.axhline(lo, **layout.LIMIT)
                 a.axhline(hi, **layout.LIMIT)
                 a.text(0.01, 0.92, f"range {words.with_unit(hi - lo, f'{m}_rom')} "

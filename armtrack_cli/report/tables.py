@@ -81,9 +81,9 @@ def pages(r: SessionReport) -> list:
         y = 0.885
         for head, rows in blocks:
             h = 0.0165 * (len(rows) + 1)
-            w0 = 0.28
+            w0 = 0.31
             layout.table(fig, [0.07, y - h, 0.86, h], rows, head,
-                         widths=[w0] + [(1 - w0) / (len(head) - 1)] * (len(head) - 1), size=7)
+                         widths=[w0] + [(1 - w0) / (len(head) - 1)] * (len(head) - 1), size=6.8)
             y -= h + 0.03
         layout.text_block(fig, 0.07, y, m_notes.lines(), size=7.5, step=0.014)
 

@@ -116,7 +116,8 @@ def motion_page(r: SessionReport):
         ax.set_ylim(0, 1.12 * float(np.nanmax(v)))
         ax.legend(loc="lower left", bbox_to_anchor=(0, 1.02), ncol=2, frameon=False)
 
-    return "Elbow angle and hand speed", draw
+    return ("Elbow angle and hand speed" if r.shoulder is not None and "elbow_x" in r.trajectory
+            else "Hand speed"), draw
 
 
 def pages(r: SessionReport) -> list:

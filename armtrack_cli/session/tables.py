@@ -54,3 +54,13 @@ def read_kinematics(path: Path) -> pd.DataFrame:
                         "rerun `armtrack fuse SESSION` (an older armtrack wrote it)")
     df["sd"] = pd.to_numeric(df["sd"], errors="coerce")
     return df
+
+
+def read_measures(path: Path) -> pd.DataFrame:
+    """measures.csv (compare): estimate and truth cells stay text; errors are numbers."""
+    df = read_csv_table(path, ("method", "measure", "segment", "estimate", "truth", "error"),
+                        "rerun `armtrack compare SESSION`")
+    df = df.astype({"segment": str, "estimate": str, "truth": str})
+    for c in ("error", "error_pct", "estimate_sd"):
+        df[c] = pd.to_numeric(df[c], errors="coerce") if c in df else float("nan")
+    return df
