@@ -81,7 +81,7 @@ def measure_comparison(method: str, est: pd.DataFrame, truth: Inputs | None) -> 
               if truth else {})
     out = []
     for r in est.itertuples(index=False):
-        tv = t_rows.get((r.measure, r.segment), "not computable: no such measure in the ground truth")
+        tv = t_rows.get((r.measure, r.segment), "not computable: the reference does not give this measure")
         e, t = _number(r.value), _number(tv)
         out.append({"method": method, "measure": r.measure, "segment": r.segment,
                     "unit": CATALOGUE.get(r.measure, r.unit), "estimate": r.value,

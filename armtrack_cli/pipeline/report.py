@@ -32,22 +32,23 @@ def _method(dest: Path, kind: str) -> str | None:
     return next((m for m in PREFERENCE[kind] if (dest / f"trajectory-{m}.csv").is_file()), None)
 
 
-def _tracked(dest: Path, kind: str, frames: int) -> float:
-    """% of frames with a wrist detection (patch) or with at least three palm blobs."""
+def _tracked(dest: Path, kind: str) -> tuple[float, int]:
+    """(% of frames with a wrist detection, or with at least three palm blobs; frames)."""
     p = dest / "detections.csv"
     if not p.is_file():
-        return float("nan")
+        return float("nan"), 0
     if kind == "palm":
         d = read_csv_table(p, ("frame", "blob"), "run `armtrack detect SESSION` first")
+        n = int(d["frame"].max()) + 1 if len(d) else 0
         per = d.groupby("frame").size()
-        return 100.0 * float((per >= 3).sum()) / max(int(d["frame"].max()) + 1, 1)
+        return (100.0 * float((per >= 3).sum()) / n if n else float("nan")), n
     d = read_csv_table(p, ("frame", "ok"), "run `armtrack detect SESSION` first")
-    return 100.0 * float(d["ok"].mean()) if len(d) else float("nan")
+    return (100.0 * float(d["ok"].mean()) if len(d) else float("nan")), len(d)
 
 
-def _quality(session: Session, dest: Path, frames: int, notes: list[str]) -> Quality:
-    q: dict[str, Any] = {"frames": frames, "imu_offset_s": None}
-    q["tracked_pct"] = _tracked(dest, session.kind, frames)
+def _quality(session: Session, dest: Path, notes: list[str]) -> Quality:
+    q: dict[str, Any] = {"imu_offset_s": None}
+    q["tracked_pct"], q["frames"] = _tracked(dest, session.kind)
     if (dest / "camera.yaml").is_file():
         err = read_camera_yaml(dest / "camera.yaml").reprojection_error_px
         q["reprojection_px"] = float("nan") if err is None else err
@@ -108,7 +109,7 @@ def gather(path: str | Path, out: str | Path | None = None) -> SessionReport:
     return SessionReport(
         session_id=meta.id, subject=meta.subject or "not stated", date=meta.recorded or "",
         task=meta.task or "", side=meta.side, kind=kind, method=method, trajectory=traj,
-        kinematics=kin, quality=_quality(session, dest, 0 if traj is None else len(traj), notes),
+        kinematics=kin, quality=_quality(session, dest, notes),
         shoulder=None if session.arm is None else np.asarray(session.arm.shoulder_m, float),
         truth_wrist=truth, errors=errors if method else None, measures=measures,
         notes=tuple(notes))

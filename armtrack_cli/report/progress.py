@@ -60,14 +60,14 @@ def pages(reports: list[SessionReport]) -> list:
                  ", ".join(f"{r.day} ({r.session_id}, {words.task_name(r.task)})" for r in reports)]
         if len(tasks) > 1:
             lines.append("Note: the sessions are of different tasks; compare like with like.")
-        lines.append("Change: last session minus the one before. Beyond uncertainty: the change "
-                     "is larger than 1.96 × the combined SD.")
+        lines.append("Change: last session minus the one before. Exceeds uncertainty: the change "
+                     "is larger than 1.96 × the combined SD (beyond uncertainty, 95 %).")
         layout.text_block(fig, 0.07, 0.905, lines, size=8.5, step=0.016)
         rows = table_rows(reports)
         n = len(reports)
         head = ["measure"] + [r.day + "\n" + r.session_id for r in reports] + \
-               ["change", "beyond uncertainty?", "unit"]
-        w = [0.34] + [0.33 / n] * n + [0.1, 0.14, 0.09]
+               ["change", "exceeds uncertainty?", "unit"]
+        w = [0.30] + [0.34 / n] * n + [0.1, 0.19, 0.07]
         h = 0.022 * (len(rows) + 2)
         layout.table(fig, [0.07, 0.83 - h, 0.86, h], rows, head, widths=w, size=7.5)
 
