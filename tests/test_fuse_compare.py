@@ -25,11 +25,9 @@ def sessions(tmp_path_factory):
                                                 occlusions=((4.0, 0.5), (7.5, 0.5)),
                                                 distractor=True, drop_rate=0.02, gt_gaps=2)}.items():
         pipeline.simulate(root / name, st)
-        pipeline.calibrate(root / name)
-        pipeline.detect(root / name)
-        for m in METHODS:
-            r = run_cli("fuse", root / name, "--method", m, "--seed", "1")
-            assert r.exit_code == 0, r.stderr
+        r = pipeline.run(root / name, through="fuse", methods=METHODS, seed=1)
+        assert r["stages"] == {"calibrate": "ran", "detect": "ran",
+                               **{f"fuse {m}": "ran" for m in METHODS}}
         made[name] = (root / name, dict(np.load(root / f"{name}.truth.npz")))
     return made
 
@@ -100,8 +98,8 @@ def test_missing_data_is_carried_as_missing(sessions):
 
 def test_same_seed_same_bytes(sessions, tmp_path):
     folder, _ = sessions["circle"]
-    run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "1", "--out", tmp_path)
-    # fuse reads camera.yaml and detections.csv from --out: copy them there first
+    r = run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "1", "--out", tmp_path)
+    assert r.exit_code == 1 and "camera.yaml: not found" in r.stderr  # --out is the work folder
     import shutil
 
     for f in ("camera.yaml", "detections.csv"):
@@ -110,7 +108,8 @@ def test_same_seed_same_bytes(sessions, tmp_path):
                    tmp_path).exit_code == 0
     a = (tmp_path / "trajectory-pf-constraint.csv").read_bytes()
     assert a == (folder / "armtrack" / "trajectory-pf-constraint.csv").read_bytes()
-    run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "2", "--out", tmp_path)
+    assert run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "2", "--out",
+                   tmp_path).exit_code == 0
     assert (tmp_path / "trajectory-pf-constraint.csv").read_bytes() != a
 
 

@@ -23,19 +23,20 @@ from armtrack_cli.session.info import describe_imu
 from armtrack_cli.session.outputs import write_bytes
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.tables import read_csv_table, read_kinematics, read_measures, read_trajectory
+from armtrack_cli.session.workfolder import WorkFolder
 
 PREFERENCE = {"palm": ("ukf-palm",), "arm": ("pf-constraint", "pf", "ukf", "ekf", "inertial"),
               "object": ("pf", "ukf", "ekf", "inertial")}
 
 
-def _method(dest: Path, kind: str) -> str | None:
-    return next((m for m in PREFERENCE[kind] if (dest / f"trajectory-{m}.csv").is_file()), None)
+def _method(work: WorkFolder, kind: str) -> str | None:
+    return next(iter(work.trajectories(PREFERENCE[kind])), None)
 
 
-def _tracked(dest: Path, kind: str) -> tuple[float, int]:
+def _tracked(work: WorkFolder, kind: str) -> tuple[float, int]:
     """(% of frames with a wrist detection, or with at least three palm blobs; frames)."""
-    p = dest / "detections.csv"
-    if not p.is_file():
+    p = work / "detections.csv"
+    if not work.has("detections.csv"):
         return float("nan"), 0
     if kind == "palm":
         d = read_csv_table(p, ("frame", "blob"), "run `armtrack detect SESSION` first")
@@ -46,11 +47,11 @@ def _tracked(dest: Path, kind: str) -> tuple[float, int]:
     return (100.0 * float(d["ok"].mean()) if len(d) else float("nan")), len(d)
 
 
-def _quality(session: Session, dest: Path, notes: list[str]) -> Quality:
+def _quality(session: Session, work: WorkFolder, notes: list[str]) -> Quality:
     q: dict[str, Any] = {"imu_offset_s": None}
-    q["tracked_pct"], q["frames"] = _tracked(dest, session.kind)
-    if (dest / "camera.yaml").is_file():
-        err = read_camera_yaml(dest / "camera.yaml").reprojection_error_px
+    q["tracked_pct"], q["frames"] = _tracked(work, session.kind)
+    if work.has("camera.yaml"):
+        err = read_camera_yaml(work / "camera.yaml").reprojection_error_px
         q["reprojection_px"] = float("nan") if err is None else err
     if session.imu is not None:
         try:
@@ -86,30 +87,30 @@ def _truth(session: Session, traj: pd.DataFrame, notes: list[str]) -> np.ndarray
 def gather(path: str | Path, out: str | Path | None = None) -> SessionReport:
     """Everything one session's pages show, from its work folder."""
     session = load_session(path)
-    dest = out_dir(session, out)
+    work = WorkFolder(out_dir(session, out))
     kind = session.kind
-    method = _method(dest, kind)
+    method = _method(work, kind)
     notes: list[str] = []
     traj = kin = errors = measures = truth = None
     if method is None:
         notes.append("no wrist-pose estimate in this work folder" if kind == "palm"
                      else "no movement estimate in this work folder")
     else:
-        traj = read_trajectory(dest / f"trajectory-{method}.csv")
-        if (dest / f"kinematics-{method}.csv").is_file():
-            kin = read_kinematics(dest / f"kinematics-{method}.csv")
+        traj = read_trajectory(work / f"trajectory-{method}.csv")
+        if work.has(f"kinematics-{method}.csv"):
+            kin = read_kinematics(work / f"kinematics-{method}.csv")
         truth = _truth(session, traj, notes)
-    if (dest / "errors.csv").is_file():
-        errors = read_csv_table(dest / "errors.csv", ("method", "joint", "axis"), "")
-    if method and (dest / "measures.csv").is_file():
-        m = read_measures(dest / "measures.csv")
+    if work.has("errors.csv"):
+        errors = read_csv_table(work / "errors.csv", ("method", "joint", "axis"), "")
+    if method and work.has("measures.csv"):
+        m = read_measures(work / "measures.csv")
         m = m[m["method"] == method]
         measures = m if len(m) else None
     meta = session.meta
     return SessionReport(
         session_id=meta.id, subject=meta.subject or "not stated", date=meta.recorded or "",
         task=meta.task or "", side=meta.side, kind=kind, method=method, trajectory=traj,
-        kinematics=kin, quality=_quality(session, dest, notes),
+        kinematics=kin, quality=_quality(session, work, notes),
         shoulder=None if session.arm is None else np.asarray(session.arm.shoulder_m, float),
         truth_wrist=truth, errors=errors if method else None, measures=measures,
         notes=tuple(notes))

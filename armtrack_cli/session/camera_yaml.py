@@ -73,3 +73,16 @@ def write_camera_yaml(path: str | Path, cam: CameraModel) -> Path:
         fs.release()
 
     return atomic_write(path, write)
+
+
+def read_calibrated_camera(path: str | Path) -> CameraModel:
+    """camera.yaml as calibrate wrote it into the work folder: intrinsics and the pose in W."""
+    path = Path(path)
+    if not path.is_file():
+        raise VideoError(path, "not found", "run `armtrack calibrate SESSION` first, with the "
+                         "same --out")
+    cam = read_camera_yaml(path)
+    if cam.R_WC is None or cam.T_WC is None:
+        raise VideoError(path, "has no R_WC/T_WC (the camera's pose in W)",
+                         "run `armtrack calibrate SESSION` to write it")
+    return cam
