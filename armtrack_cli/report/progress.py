@@ -60,8 +60,9 @@ def pages(reports: list[SessionReport]) -> list:
                  ", ".join(f"{r.day} ({r.session_id}, {words.task_name(r.task)})" for r in reports)]
         if len(tasks) > 1:
             lines.append("Note: the sessions are of different tasks; compare like with like.")
-        lines.append("Change: last session minus the one before. Exceeds uncertainty: the change "
-                     "is larger than 1.96 × the combined SD (beyond uncertainty, 95 %).")
+        lines += ["Change: last session minus the one before. Exceeds uncertainty: the change is",
+                  "larger than 1.96 × the combined SD of the two sessions (beyond uncertainty, 95 %).",
+                  "The SD covers the tracking's uncertainty only, not every error of a measure."]
         layout.text_block(fig, 0.07, 0.905, lines, size=8.5, step=0.016)
         rows = table_rows(reports)
         n = len(reports)
