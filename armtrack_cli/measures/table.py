@@ -96,11 +96,12 @@ def path_values(inp: Inputs, s: Settings, windows: list | None = None
         return {(k, "session"): why for k in PATH if k != "straightness" or reach}, []
     fs = 1.0 / (t[1] - t[0])
     out = {(k, "session"): x for k, x in _path_values(t, p, v, fs, False, s).items()}
+    own = segments(t, v, s)
+    out[("segments", "session")] = float(len(own))  # always this signal's own count
     if windows is None:  # windows in session time, so other samplings use the same segments
-        windows = [(t[a], t[b - 1]) for a, b in segments(t, v, s)]
+        windows = [(t[a], t[b - 1]) for a, b in own]
     segs = [(int(np.searchsorted(t, a - 1e-9)), int(np.searchsorted(t, b + 1e-9)))
             for a, b in windows]
-    out[("segments", "session")] = float(len(segs))
     if len(segs) > 1:
         out[("time_to_peak_speed", "session")] = (f"not computable: {len(segs)} movements "
                                                   "(see each segment)")
