@@ -23,7 +23,8 @@ NOT_FILE_CALLS = {("replace", "dataclasses"), ("load", "json"), ("load", "tomlli
 
 def _component(path: Path) -> str:
     rel = path.relative_to(PKG)
-    return rel.parts[0].removesuffix(".py") if rel.parts[0] != "__init__.py" else "root"
+    return rel.parts[0].removesuffix(".py") if rel.parts[0] not in ("__init__.py", "__main__.py") \
+        else "root"
 
 
 def _modules():

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.limits import MAX_SESSION_S
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.text_table import parse_table, read_text_lines
 
@@ -100,6 +101,13 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
         r = int(np.flatnonzero(d <= 0)[0]) + 1
         raise GroundTruthError(path, f"line {tab.line_of[r]}: time goes from {t[r - 1]:g} to "
                                f"{t[r]:g} s", "frames must be in increasing time order")
+    step = float(np.median(d)) if d.size else 1.0 / freq
+    if abs(step * freq - 1.0) > 0.05:  # the Time column must tick at FREQUENCY
+        raise GroundTruthError(path, f"its Time column steps by {step:g} per frame, but FREQUENCY "
+                               f"{freq:g} Hz means {1 / freq:g} s (is the time in ms?)",
+                               "export Time in seconds, as QTM does")
+    if t[-1] - t[0] > MAX_SESSION_S:
+        raise GroundTruthError(path, f"spans {(t[-1] - t[0]) / 3600:.0f} h: its time is damaged")
     notes = list(tab.notes)
     n_frames = keys.get("NO_OF_FRAMES", [None])[0]
     if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
@@ -116,6 +124,9 @@ def select_markers(traj: MarkerTrajectories, wanted: dict[str, str], toml: Path)
                                    f"{role} in {toml.name})",
                                    f"its markers are {', '.join(traj.names)}")
         out[role] = traj.names.index(name)
+        if not np.isfinite(traj.xyz[:, out[role]]).all(axis=1).any():
+            raise GroundTruthError(traj.path, f"marker {name!r} ({role}) is never seen: every "
+                                   "frame is a gap", "check the marker labels in QTM")
     return out
 
 
