@@ -34,8 +34,6 @@ def settings_for(recipe: str | None, sets: tuple[str, ...], *, method: str | Non
                  ) -> tuple[FuseSettings, str]:
     """[fuse] from defaults < recipe < --set < explicit flags, checked; and where it came from."""
     doc, where = resolve_recipe(recipe, sets)
-    if sets:
-        where = "--set" if where == "defaults" else f"{where} with --set"
     s = with_flags(section(doc, "fuse", FuseSettings, where), method=method,
                    particles=particles, seed=seed)
     return checked(s, where), where

@@ -33,6 +33,9 @@ def read_camera_yaml(path: str | Path) -> CameraModel:
         raise VideoError(path, "is not OpenCV FileStorage YAML",
                          "it should start with %YAML:1.0 and hold camera_matrix") from None
     try:
+        if not fs.root().isMap():
+            raise VideoError(path, "is not OpenCV FileStorage YAML with named entries",
+                             "it should hold camera_matrix, distortion_coefficients, …")
         K = fs.getNode("camera_matrix").mat()
         dist = fs.getNode("distortion_coefficients").mat()
         w = fs.getNode("image_width").real()
@@ -41,6 +44,9 @@ def read_camera_yaml(path: str | Path) -> CameraModel:
         T = fs.getNode("T_WC").mat()
         err = fs.getNode("reprojection_error_px")
         err = None if err.empty() else float(err.real())
+    except cv2.error:  # a node of the wrong kind (a list where a matrix belongs, …)
+        raise VideoError(path, "has an entry OpenCV cannot read as a matrix or number",
+                         "compare it with a camera.yaml that armtrack calibrate wrote") from None
     finally:
         fs.release()
     if K is None or K.shape != (3, 3):
@@ -105,10 +111,8 @@ def write_camera_yaml(path: str | Path, cam: CameraModel) -> Path:
 
 def read_calibrated_camera(path: str | Path) -> CameraModel:
     """camera.yaml as calibrate wrote it into the work folder: intrinsics and the pose in W."""
-    path = Path(path)
-    if not path.is_file():
-        raise VideoError(path, "not found", "run `armtrack calibrate SESSION` first, with the "
-                         "same --out")
+    path = regular_file(path, VideoError, "a camera model (camera.yaml)",
+                        hint="run `armtrack calibrate SESSION` first, with the same --out")
     cam = read_camera_yaml(path)
     if cam.R_WC is None or cam.T_WC is None:
         raise VideoError(path, "has no R_WC/T_WC (the camera's pose in W)",

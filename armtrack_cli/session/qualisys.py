@@ -20,6 +20,8 @@ from armtrack_cli.session.text_table import parse_table, read_text_lines
 MM = 1e-3  # QTM exports millimetres
 _KEY = re.compile(r"^[A-Z][A-Z0-9_]*(\t|$)")
 
+MAX_MARKER_MM = 100_000.0  # 100 m: no motion-capture volume is larger
+
 
 def _header(path: Path, lines: list[str]) -> tuple[dict[str, list[str]], int]:
     keys: dict[str, list[str]] = {}
@@ -84,6 +86,12 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     if coords.shape[1] != 3 * m:
         raise GroundTruthError(path, f"has {coords.shape[1]} coordinate columns for {m} markers "
                                f"(expected {3 * m})", "is MARKER_NAMES complete?")
+    far = np.isinf(coords) | (np.abs(np.nan_to_num(coords)) > MAX_MARKER_MM)
+    if far.any():
+        r, k = np.argwhere(far)[0]
+        raise GroundTruthError(path, f"line {tab.line_of[r]}: marker {names[k // 3]} has "
+                               f"{'XYZ'[k % 3]} = {coords[r, k]:g} mm, beyond any capture volume",
+                               "the row is damaged: empty its cells (a gap)")
     xyz = coords.reshape(-1, m, 3) * MM
     xyz[np.all(xyz == 0.0, axis=2)] = np.nan  # QTM writes gaps as zeros in some versions
     xyz[np.any(np.isnan(xyz), axis=2)] = np.nan

@@ -50,8 +50,8 @@ def recipe_file(recipe: str | None) -> Path | None:
     """The file a recipe name or path resolves to (None for none, or one not found)."""
     if recipe is None:
         return None
-    if Path(recipe).is_file():
-        return Path(recipe)
+    if Path(recipe).exists() or Path(recipe).is_symlink():
+        return Path(recipe)  # a path: read_small_text says what is wrong with it
     return next((d / f"{recipe}.toml" for d in recipe_dirs() if (d / f"{recipe}.toml").is_file()),
                 None)
 

@@ -17,7 +17,8 @@ def read_csv_table(path: Path, required: tuple[str, ...], hint: str) -> pd.DataF
     try:
         df = pd.read_csv(path)
     except (ValueError, pd.errors.ParserError) as exc:
-        raise DataError(path, f"is not a readable CSV ({exc})") from None
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise DataError(path, f"is not a readable CSV ({first})") from None
     missing = [c for c in required if c not in df.columns]
     if missing:
         raise DataError(path, f"lacks column(s) {', '.join(missing)}", hint)
@@ -97,7 +98,7 @@ def read_trajectory(path: Path) -> pd.DataFrame:
     if df.empty:
         raise DataError(path, "has no rows", "rerun `armtrack fuse`")
     values = numeric(path, df, list(df.columns))
-    t = values[:, 0]
+    t = values[:, df.columns.get_loc("t")]
     if np.isnan(t).any():
         r = int(np.flatnonzero(np.isnan(t))[0])
         raise DataError(path, f"row {r + 1}: t is empty", "rerun `armtrack fuse`")

@@ -79,9 +79,11 @@ def _header_rate(path: Path, i: int, text: str) -> float:
 
 def _counter_steps(path: Path, tab: TextTable, counter: np.ndarray) -> np.ndarray:
     """Steps between consecutive packet counters (1 = none lost), checked for repeats."""
-    if np.isnan(counter).any():
-        r = int(np.flatnonzero(np.isnan(counter))[0])
-        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter is empty")
+    bad = ~np.isfinite(counter) | (counter < 0) | (counter != np.round(counter))
+    if bad.any():
+        r = int(np.flatnonzero(bad)[0])
+        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter is empty or not a "
+                           f"whole number ({counter[r]})")
     d = np.mod(np.diff(counter), COUNTER_WRAP)
     if (d == 0).any():
         r = int(np.flatnonzero(d == 0)[0]) + 1
