@@ -125,8 +125,8 @@ def read_kinematics(path: Path) -> pd.DataFrame:
         df["value"], errors="coerce").isna()
     if text.any():
         r = int(np.flatnonzero(text)[0])
-        raise DataError(path, f"row {r + 1}: value = {df['value'].iloc[r]!r} is neither a number "
-                        "nor 'not computable: why'", "rerun `armtrack fuse`")
+        raise DataError(path, f"row {r + 1}: value = {df['value'].iloc[r]!r} is not a number "
+                        "(nor 'not computable: why')", "rerun `armtrack fuse`")
     cols = [c for c in ("sd", "t_start", "t_end") if c in df]
     df[cols] = numeric(path, df, cols)
     return df
