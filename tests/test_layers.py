@@ -12,8 +12,8 @@ from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "armtrack_cli"
 RANK = {"cli": 5, "pipeline": 4, "session": 3, "calibrate": 3, "detect": 3, "fuse": 3,
-        "compare": 3, "report": 3, "simulate": 3, "filters": 2, "vision": 2, "core": 1,
-        "recipes": 1}
+        "compare": 3, "report": 3, "simulate": 3, "measures": 2, "filters": 2, "vision": 2,
+        "core": 1, "recipes": 1}
 FILE_CALLS = {"open", "read_bytes", "write_bytes", "read_text", "write_text", "imread", "imwrite",
               "VideoCapture", "VideoWriter", "read_csv", "to_csv", "FileStorage", "savez",
               "savez_compressed", "mkstemp", "load", "exists", "is_file", "is_dir", "stat",
