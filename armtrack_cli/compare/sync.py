@@ -1,0 +1,77 @@
+"""The ground truth's clock offset, estimated from the data ([sync] groundtruth_offset_s =
+"auto"): the δ, with session time = truth time + δ, that best lines the truth up with an
+estimated trajectory, and its standard deviation.
+
+Cost: the variance of the residual estimate − truth(t − δ) over the frames both cover (the
+mean residual, an estimate's constant bias, is not a time offset and is left out). A grid at
+the truth's sample period finds the basin; a bounded scalar search refines it. The SD is the
+Gauss–Newton one, σ² / Σ‖v‖² with v the truth's velocity, inflated for the residuals' serial
+correlation (n / n_eff, n_eff from their lag-1 autocorrelation ρ: n (1 − ρ) / (1 + ρ)).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armtrack_cli.compare.errors import truth_at
+
+MIN_OVERLAP = 0.5  # share of the estimate's frames that must meet the shifted truth
+
+
+@dataclass(frozen=True)
+class Offset:
+    estimate_s: float  # δ: session time = truth time + δ
+    sd_s: float
+    frames: int  # frames used at the estimate
+
+
+def _residual(delta, t, est, truth_t, truth_xyz, rate_hz):
+    tr = truth_at(t, truth_t + delta, truth_xyz, rate_hz)
+    ok = np.isfinite(est).all(axis=1) & np.isfinite(tr).all(axis=1)
+    return est[ok] - tr[ok], ok
+
+
+def _cost(delta, t, est, truth_t, truth_xyz, rate_hz, n_est):
+    r, ok = _residual(delta, t, est, truth_t, truth_xyz, rate_hz)
+    if ok.sum() < MIN_OVERLAP * n_est:
+        return np.inf
+    return float(np.mean(np.sum((r - r.mean(axis=0)) ** 2, axis=1)))
+
+
+def estimate_offset(t: np.ndarray, est: np.ndarray, truth_t: np.ndarray, truth_xyz: np.ndarray,
+                    rate_hz: float, *, search_s: float = 2.0) -> Offset | None:
+    """t (n,) s on the session clock, est (n, 3) m (NaN = missing); truth_t (m,) s on the
+    truth's own clock, truth_xyz (m, 3) m in W. None when no offset in ±search_s gives the
+    overlap needed."""
+    from scipy.optimize import minimize_scalar
+
+    n_est = int(np.isfinite(est).all(axis=1).sum())
+    if n_est < 10:
+        return None
+    step = 1.0 / rate_hz
+    grid = np.arange(-search_s, search_s + step / 2, step)
+    costs = np.array([_cost(d, t, est, truth_t, truth_xyz, rate_hz, n_est) for d in grid])
+    if not np.isfinite(costs).any():
+        return None
+    d0 = grid[int(np.argmin(costs))]
+    res = minimize_scalar(_cost, bounds=(d0 - step, d0 + step), method="bounded",
+                          args=(t, est, truth_t, truth_xyz, rate_hz, n_est),
+                          options={"xatol": 1e-5})
+    delta = float(res.x) if res.fun <= costs.min() else float(d0)
+    r, ok = _residual(delta, t, est, truth_t, truth_xyz, rate_hz)
+    r = r - r.mean(axis=0)
+    h = 0.5 * step  # the truth's velocity at the frames, by central differences
+    v = (truth_at(t, truth_t + delta + h, truth_xyz, rate_hz)
+         - truth_at(t, truth_t + delta - h, truth_xyz, rate_hz))[ok] / (2 * h)
+    good = np.isfinite(v).all(axis=1)
+    r, v = r[good], v[good]
+    n = len(r)
+    sigma2 = float(np.sum(r**2) / max(3 * n - 1, 1))
+    rho = float(np.mean([np.corrcoef(r[:-1, k], r[1:, k])[0, 1] for k in range(3)
+                         if np.std(r[:, k]) > 0])) if n > 3 else 0.0
+    rho = min(max(rho, 0.0), 0.99)
+    inflate = (1 + rho) / (1 - rho)
+    sd = float(np.sqrt(sigma2 / max(np.sum(v**2), 1e-12) * inflate))
+    return Offset(delta, sd, n)
