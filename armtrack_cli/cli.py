@@ -155,7 +155,7 @@ def detect(sessions, recipe, sets, as_json, out_dir) -> None:
         _emit(r, as_json, [line + f", {r['frames_per_s']:.0f} frames/s -> {r['detections']}"])
 
 
-METHOD_CHOICE = click.Choice(["inertial", "ekf", "ukf", "pf", "pf-constraint"])
+METHOD_CHOICE = click.Choice(["inertial", "ekf", "ukf", "pf", "pf-constraint", "ukf-palm"])
 
 
 @main.command()

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 METHODS = ("inertial", "ekf", "ukf", "pf", "pf-constraint")
+PALM_METHODS = ("ukf-palm",)  # Cordella et al.: palm sessions (pipeline/palm.py)
 SMOOTHERS = ("rts", "none")
 
 

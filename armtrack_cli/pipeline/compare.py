@@ -13,6 +13,7 @@ from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.measures import MEASURES, measures
 from armtrack_cli.fuse.settings import METHODS
 from armtrack_cli.pipeline.common import out_dir
+from armtrack_cli.pipeline.palm import compare_palm
 from armtrack_cli.session.config import load_session, require
 from armtrack_cli.session.outputs import write_table
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
@@ -29,6 +30,8 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
         raise ConfigError(session.toml_path, '[sync] groundtruth_offset_s = "auto" is not '
                           "supported yet", "write the offset in seconds")
     dest = out_dir(session, out)
+    if session.palm is not None:  # Cordella et al.: pipeline/palm.py
+        return compare_palm(session, dest, methods)
     if not methods:
         methods = tuple(m for m in METHODS if (dest / f"trajectory-{m}.csv").exists())
         if not methods:

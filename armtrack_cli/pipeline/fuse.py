@@ -16,8 +16,9 @@ from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.measures import MEASURES, measures
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.methods import Inputs, run
-from armtrack_cli.fuse.settings import METHODS, SMOOTHERS, FuseSettings
+from armtrack_cli.fuse.settings import METHODS, PALM_METHODS, SMOOTHERS, FuseSettings
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.palm import fuse_palm
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
@@ -43,9 +44,9 @@ def settings_for(recipe: str | None, sets: tuple[str, ...], method: str | None,
     over = {k: v for k, v in (("method", method), ("particles", particles), ("seed", seed))
             if v is not None}  # explicit flags win over the recipe
     s = dataclasses.replace(s, **over)
-    if s.method not in METHODS:
+    if s.method not in METHODS + PALM_METHODS:
         raise ConfigError(where, f"[fuse] method = {s.method!r} is not a method",
-                          f"methods are {', '.join(METHODS)}")
+                          f"methods are {', '.join(METHODS + PALM_METHODS)}")
     from armtrack_cli.filters.resampling import SCHEMES
 
     if s.resampling not in SCHEMES:
@@ -99,6 +100,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
          out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
     s, where = settings_for(recipe, sets, method, particles, seed)
+    if s.method in PALM_METHODS:  # Cordella et al.: pipeline/palm.py
+        return fuse_palm(session, out_dir(session, out), *resolve_recipe(recipe, sets))
     if s.method == "pf-constraint" and session.arm is None:
         raise ConfigError(session.toml_path, "has no [arm] section, which pf-constraint needs",
                           "use inertial, ekf, ukf or pf, or add the arm model")

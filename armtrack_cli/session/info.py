@@ -150,14 +150,12 @@ def readiness(session: Session, have: set[str]) -> dict[str, str]:
     camera = ["video", "intrinsics", "board"]
     needs = {m: ["imu", *camera, "patch"] for m in METHODS_ARM}
     needs["pf-constraint"].append("arm")
-    needs["ukf-palm"] = [*camera, "palm", "depth"]
+    needs["ukf-palm"] = [*camera, "palm"]  # depth frames help the initialisation only
     needs["compare"] = ["groundtruth"]
     out = {}
     for name, req in needs.items():
         lack = [r for r in req if r not in have]
         out[name] = "ready" if not lack else "needs " + ", ".join(lack)
-    if out["ukf-palm"] == "ready":  # the data are there; the method is not in this version yet
-        out["ukf-palm"] = "data ready; the method is not in this version yet"
     return out
 
 

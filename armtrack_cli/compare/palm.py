@@ -1,0 +1,93 @@
+"""ukf-palm scored against Qualisys palm markers: the validation Cordella et al. left to
+future work (V). The truth WRIST is the Qualisys WRIST marker; the truth hand frame comes from
+the six markers through the same definition of H (core/wrist.py), and the truth forearm frame
+F is that hand frame averaged over the first second of the estimate (the neutral start)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from armtrack_cli.compare.errors import COLUMNS, error_rows, table_one, truth_at
+from armtrack_cli.core.wrist import ANGLES, hand_frame, wrist_angles_deg
+from armtrack_cli.core.wrist_measures import wrist_pose_measures
+
+NEUTRAL_S = 1.0
+
+
+@dataclass(frozen=True)
+class TruthPose:
+    wrist: np.ndarray  # (K, 3) WRIST marker in W at the trajectory's times, NaN in gaps
+    angles_deg: np.ndarray  # (K, 3) flexion, deviation, pronation of R_FH
+
+
+@dataclass(frozen=True)
+class PalmScore:
+    position: pd.DataFrame  # errors.csv rows (cm)
+    angles: pd.DataFrame  # per angle: mean, SD, RMSE, max |error| (deg), n
+    measures: pd.DataFrame  # measure, unit, estimate, truth, difference
+    excluded: int  # estimated frames without ground truth
+    text: str
+
+
+def mean_rotation(R: np.ndarray) -> np.ndarray:
+    """Chordal L2 mean of rotations (N, 3, 3): the projection of their average onto SO(3)."""
+    U, _, Vt = np.linalg.svd(np.nanmean(R, axis=0))
+    return U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+
+
+def truth_pose(t: np.ndarray, t_q: np.ndarray, xyz: np.ndarray, rate_hz: float,
+               names: tuple[str, ...], side: str, *, start_t: float) -> TruthPose:
+    """Truth at times t (K,) from Qualisys markers xyz (N, M, 3) in W at session times t_q."""
+    at = np.stack([truth_at(t, t_q, xyz[:, k], rate_hz) for k in range(xyz.shape[1])], 1)
+    wrist, R_WH = hand_frame(at, tuple(names), side)
+    first = (t >= start_t) & (t < start_t + NEUTRAL_S) & np.isfinite(R_WH).all(axis=(1, 2))
+    if not first.any():
+        return TruthPose(wrist, np.full((t.size, 3), np.nan))
+    R_WF = mean_rotation(R_WH[first])
+    ok = np.isfinite(R_WH).all(axis=(1, 2))
+    ang = np.full((t.size, 3), np.nan)
+    ang[ok] = wrist_angles_deg(R_WF.T @ R_WH[ok], side)
+    return TruthPose(wrist, ang)
+
+
+def _angle_rows(method: str, est: np.ndarray, truth: np.ndarray) -> list[dict]:
+    rows = []
+    for k, name in enumerate(ANGLES):
+        ok = np.isfinite(est[:, k]) & np.isfinite(truth[:, k])
+        e = est[ok, k] - truth[ok, k]
+        n = int(e.size)
+        rows.append({"method": method, "angle": name,
+                     "mean_deg": float(e.mean()) if n else np.nan,
+                     "std_deg": float(e.std(ddof=1)) if n > 1 else np.nan,
+                     "rmse_deg": float(np.sqrt(np.mean(e**2))) if n else np.nan,
+                     "max_abs_deg": float(np.abs(e).max()) if n else np.nan, "n": n})
+    return rows
+
+
+def score(method: str, traj: pd.DataFrame, truth: TruthPose) -> PalmScore:
+    t = traj["t"].to_numpy()
+    est_w = traj[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
+    est_a = traj[[f"{a}_deg" for a in ANGLES]].to_numpy()
+    pos = error_rows(method, "wrist", est_w, truth.wrist)
+    ang = _angle_rows(method, est_a, truth.angles_deg)
+    ok = np.isfinite(est_w).all(1) & np.isfinite(truth.wrist).all(1) & np.isfinite(
+        truth.angles_deg).all(1)
+    excluded = int((np.isfinite(est_w).all(1) & ~ok).sum())
+    mask = lambda a: np.where(ok[:, None], a, np.nan)  # noqa: E731  (the same frames for both)
+    m_est = wrist_pose_measures(t, mask(est_w), mask(est_a))
+    m_tru = wrist_pose_measures(t, mask(truth.wrist), mask(truth.angles_deg))
+    meas = pd.DataFrame([{"method": method, "measure": a[0], "unit": a[2], "estimate": a[1],
+                          "truth": b[1], "difference": a[1] - b[1]}
+                         for a, b in zip(m_est, m_tru)])
+    lines = [table_one(pos, "wrist"), "", "wrist angle error (deg)   mean     SD   RMSE    max"]
+    for r in ang:
+        lines.append(f"  {r['angle']:<22} {r['mean_deg']:6.2f} {r['std_deg']:6.2f} "
+                     f"{r['rmse_deg']:6.2f} {r['max_abs_deg']:6.2f}")
+    rom = meas[meas["measure"].str.endswith("_rom")]
+    lines.append("RoM (deg)  " + ", ".join(f"{r.measure[:-4]} {r.estimate:.1f} vs {r.truth:.1f}"
+                                           for r in rom.itertuples()))
+    return PalmScore(pd.DataFrame(pos, columns=list(COLUMNS)), pd.DataFrame(ang), meas,
+                     excluded, "\n".join(lines))

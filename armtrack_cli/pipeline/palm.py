@@ -1,0 +1,124 @@
+"""ukf-palm orchestration (Cordella et al.): files in through session/, the pure stages
+fuse/palm_* and compare/palm, files out. pipeline/fuse.py and pipeline/compare.py dispatch
+palm sessions here."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from armtrack_cli.compare import palm as cmp
+from armtrack_cli.core.errors import ConfigError, DataError
+from armtrack_cli.core.wrist import ANGLES
+from armtrack_cli.core.wrist_measures import wrist_pose_measures
+from armtrack_cli.fuse.palm_init import depth_at, initial_pose
+from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig
+from armtrack_cli.fuse.palm_run import marker_area, track, trajectory_table
+from armtrack_cli.session.camera_yaml import read_camera_yaml
+from armtrack_cli.session.config import Session, require
+from armtrack_cli.session.depth import depth_path, read_depth_png
+from armtrack_cli.session.outputs import write_table
+from armtrack_cli.session.palm_io import read_palm_blobs, read_palm_toml
+from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
+from armtrack_cli.session.recipe import section
+from armtrack_cli.session.tables import read_trajectory
+from armtrack_cli.session.video import probe_video
+
+METHOD = "ukf-palm"
+
+
+def kinematics_table(traj: pd.DataFrame) -> pd.DataFrame:
+    rows = wrist_pose_measures(traj["t"].to_numpy(), traj[["wrist_x", "wrist_y", "wrist_z"]]
+                               .to_numpy(), traj[[f"{a}_deg" for a in ANGLES]].to_numpy())
+    return pd.DataFrame(rows, columns=["measure", "value", "unit"])
+
+
+def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, Any]:
+    """`armtrack fuse SESSION --method ukf-palm` -> trajectory-, kinematics-,
+    associations-ukf-palm.csv."""
+    if session.palm is None:
+        raise ConfigError(session.toml_path, "has no [palm] section, which ukf-palm needs",
+                          "ukf-palm tracks the six palm markers of a Cordella session")
+    require(session, "camera", "video")
+    s = section(doc, "ukf_palm", PalmUkfSettings, where)
+    cam = read_camera_yaml(dest / "camera.yaml") if (dest / "camera.yaml").exists() else None
+    if cam is None or cam.R_WC is None:
+        raise DataError(dest / "camera.yaml", "not found or without R_WC/T_WC",
+                        "run `armtrack calibrate SESSION` first")
+    palm = read_palm_toml(dest / "palm.toml")
+    video = probe_video(session.camera.video)
+    blobs = read_palm_blobs(dest / "detections.csv", video.n_frames)
+    dpath = depth_path(session.root, palm.frame)
+    z = depth_at(read_depth_png(dpath) if dpath.exists() else None, palm.pixels)
+    init = initial_pose(palm.position_H, palm.pixels, z, K=cam.K, dist=cam.dist,
+                        sigma_px=s.pixel_sigma, sigma_z=s.depth_sigma_m)  # eq. 13-20
+    rig = Rig(cam.K, cam.dist, init.R_CW0, init.T_CW0, palm.position_H)
+    start = time.perf_counter()
+    tr = track(video.t, blobs, palm.frame, rig, s, float(cam.width * cam.height),
+               marker_area(blobs[palm.frame], palm.pixels))
+    elapsed = time.perf_counter() - start
+    R_WW0 = cam.R_WC.T @ init.R_CW0  # X_W = R_WCᵀ (X_C − T_WC)
+    T_WW0 = cam.R_WC.T @ (init.T_CW0 - cam.T_WC)
+    table = trajectory_table(video.t, tr, R_WW0, T_WW0, palm.side, s.max_coast_s)
+    how = {"depth": "projections and depths (eq. 13)" if init.used_depth else
+           f"projections and link lengths only: no depth frame {dpath.name}",
+           "residual_px": round(init.rms_px, 4), "residual_mm": round(init.rms_depth_mm, 4)
+           if init.used_depth else None, "iterations": init.iterations}
+    settings = {"recipe": where, "method": METHOD, **dataclasses.asdict(s), "initialisation": how}
+    write_table(dest / f"trajectory-{METHOD}.csv", table, command="fuse", settings=settings)
+    write_table(dest / f"kinematics-{METHOD}.csv", kinematics_table(table), command="fuse",
+                settings=settings)
+    assoc = [(i, b, int(m)) for i, mob in enumerate(tr.marker_of_blob) for b, m in enumerate(mob)]
+    names = np.array(("clutter",) + palm.markers)
+    write_table(dest / f"associations-{METHOD}.csv", pd.DataFrame(
+        {"frame": [a[0] for a in assoc], "blob": [a[1] for a in assoc],
+         "marker": names[[a[2] + 1 for a in assoc]] if assoc else []}), command="fuse",
+        settings={"method": METHOD})
+    n = video.n_frames - palm.frame
+    return {"method": METHOD, "trajectory": str(dest / f"trajectory-{METHOD}.csv"),
+            "frames": n, "detections_used": int((tr.used > 0).sum()),
+            "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
+            "initial_wrist_m": [round(float(v), 4) for v in T_WW0],
+            "initialised_from": how["depth"], "init_residual_px": how["residual_px"],
+            "init_residual_mm": how["residual_mm"], "depth_missing": not init.used_depth}
+
+
+def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict[str, Any]:
+    """Palm sessions: ukf-palm against the Qualisys palm markers -> errors.csv (WRIST, cm),
+    wrist-angle-errors.csv (deg) and measures.csv (estimate, truth, difference)."""
+    gt = session.groundtruth
+    missing = [m for m in session.palm.markers if m not in gt.markers]
+    if missing:
+        raise ConfigError(session.toml_path, f"[groundtruth] markers lacks {', '.join(missing)}",
+                          "name the Qualisys marker of every palm marker, e.g. WRIST = \"WRIST\"")
+    methods = methods or (METHOD,)
+    if methods != (METHOD,):
+        raise ConfigError(session.toml_path, f"is a palm session; only {METHOD} scores here",
+                          f"use --method {METHOD}")
+    traj = read_trajectory(dest / f"trajectory-{METHOD}.csv")
+    qtm = read_qualisys(gt.file)
+    cols = select_markers(qtm, {m: gt.markers[m] for m in session.palm.markers}, session.toml_path)
+    xyz = np.stack([to_world(qtm.xyz[:, cols[m]], gt.to_world) for m in session.palm.markers], 1)
+    t = traj["t"].to_numpy()
+    t_q = qtm.t + session.sync.groundtruth_offset_s  # session time = Qualisys time + offset
+    if t_q[0] > np.nanmax(t) or t_q[-1] < np.nanmin(t):
+        raise DataError(gt.file, f"does not overlap trajectory-{METHOD}.csv in time",
+                        "check [sync] groundtruth_offset_s")
+    truth = cmp.truth_pose(t, t_q, xyz, qtm.rate_hz, session.palm.markers, session.meta.side,
+                           start_t=float(t[np.isfinite(traj["wrist_x"].to_numpy())][0]))
+    res = cmp.score(METHOD, traj, truth)
+    write_table(dest / "errors.csv", res.position, command="compare",
+                settings={"methods": [METHOD]})
+    write_table(dest / "wrist-angle-errors.csv", res.angles, command="compare",
+                settings={"methods": [METHOD]})
+    write_table(dest / "measures.csv", res.measures, command="compare",
+                settings={"methods": [METHOD]})
+    return {"errors": str(dest / "errors.csv"), "measures": str(dest / "measures.csv"),
+            "angle_errors": str(dest / "wrist-angle-errors.csv"), "methods": [METHOD],
+            "excluded_frames": {f"{METHOD}/wrist": res.excluded}, "table": res.text,
+            "rows": res.position.to_dict("records")}
