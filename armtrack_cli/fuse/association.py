@@ -8,9 +8,11 @@ eq. 12). The priors (eq. 7) are p(a = 0) and p(a = j) = p_marker / M, as in [3].
 The paper takes the most probable a_i for each blob on its own. We keep its posterior (eq. 12)
 but choose the jointly most probable association in which each marker explains at most one
 blob (an assignment problem, solved exactly), and a blob further than the gate from a marker
-cannot be that marker. Blobs that merge (two predicted markers closer than ``merge_px``)
-would pull the estimate between the two: such markers are left out of the update, and a blob
-associated with either is gated out.
+cannot be that marker. Blobs that merge would pull the estimate between two markers: a blob
+that the merged hypothesis of two neighbouring markers j, k (centroid at (ŷ_j + ŷ_k)/2,
+covariance (P_yy,j + P_yy,k)/4) explains better than its marker alone is gated out, and so is
+one associated with markers predicted closer than ``merge_px`` (too close to tell apart).
+The caller also gates out blobs whose area is that of two markers.
 """
 
 from __future__ import annotations
@@ -38,15 +40,19 @@ def log_posterior(y: np.ndarray, zm: np.ndarray, S: np.ndarray, *, prior_marker:
     y (B, 2) blobs; zm (M, 2) predicted marker pixels (eq. 10); S (M, 2, 2) their innovation
     covariances P_yy,j (eq. 11)."""
     M = zm.shape[0]
-    d = y[:, None, :] - zm[None]  # (B, M, 2)
-    a, b, c = S[:, 0, 0], S[:, 0, 1], S[:, 1, 1]
-    det = a * c - b * b
-    m2 = (c * d[..., 0] ** 2 - 2 * b * d[..., 0] * d[..., 1] + a * d[..., 1] ** 2) / det
-    ll = -0.5 * m2 - np.log(2 * np.pi * np.sqrt(det))  # log N(y_i − ŷ_j, P_yy,j), eq. 12
+    ll, m2 = _gauss2(y[:, None, :] - zm[None], S[None])  # log N(y_i − ŷ_j, P_yy,j), eq. 12
     out = np.empty((y.shape[0], M + 1))
     out[:, 0] = np.log(prior_clutter / image_area)  # clutter anywhere in the image
     out[:, 1:] = ll + np.log(prior_marker / M)
     return out, m2
+
+
+def _gauss2(d: np.ndarray, S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """log N(d; 0, S) and the squared Mahalanobis distance for (..., 2) d, (..., 2, 2) S."""
+    a, b, c = S[..., 0, 0], S[..., 0, 1], S[..., 1, 1]
+    det = a * c - b * b
+    m2 = (c * d[..., 0] ** 2 - 2 * b * d[..., 0] * d[..., 1] + a * d[..., 1] ** 2) / det
+    return -0.5 * m2 - np.log(2 * np.pi * np.sqrt(det)), m2
 
 
 def associate(y: np.ndarray, zm: np.ndarray, S: np.ndarray, usable: np.ndarray, *,
@@ -74,6 +80,13 @@ def associate(y: np.ndarray, zm: np.ndarray, S: np.ndarray, usable: np.ndarray, 
     sep = np.linalg.norm(zm[:, None] - zm[None], axis=-1) + np.eye(M) * 1e9
     merged = ((sep < merge_px) & usable[None, :]).any(axis=1) & usable
     marker_of_blob[np.isin(marker_of_blob, np.flatnonzero(merged))] = -1  # gated out
+    i = np.flatnonzero(marker_of_blob >= 0)
+    j = marker_of_blob[i]
+    near = usable[None, :] & (sep[j] < 3 * merge_px)  # (n, M): j's neighbours k
+    if near.any():  # one blob over two merged markers: N(y − (ŷ_j + ŷ_k)/2, (S_j + S_k)/4)
+        ll2, _ = _gauss2(y[i, None] - (zm[j, None] + zm[None]) / 2, (S[j, None] + S[None]) / 4)
+        own = lp[i, 1 + j] - np.log(prior_marker / M)
+        marker_of_blob[i[(near & (ll2 > own[:, None])).any(axis=1)]] = -1  # gated out
     blob_of_marker = np.full(M, -1)
     used = marker_of_blob >= 0
     blob_of_marker[marker_of_blob[used]] = np.flatnonzero(used)

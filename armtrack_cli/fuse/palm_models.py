@@ -31,7 +31,9 @@ class PalmUkfSettings:
     max_coast_s: float = 1.0  # rows without markers for longer than this are left empty
     init_sigma_deg: float = 2.0  # P0: attitude about the initial pose
     init_sigma_m: float = 0.003  # P0: WRIST position about the initial pose
-    depth_sigma_m: float = 0.004  # initialisation (eq. 13): depth noise against σ_px
+    depth_sigma_m: float = 0.004  # σ_z of a marker's depth reading (eq. 13)
+    depth_updates: bool = True  # also update with the associated markers' depths (the paper
+    #                             uses depth at initialisation only: cordella-ukf-palm sets false)
     alpha: float = 1.0  # scaled sigma points (Wan & van der Merwe)
     beta: float = 2.0
     kappa: float = 0.0
@@ -75,6 +77,14 @@ def project(rig: Rig, R: np.ndarray, x: np.ndarray) -> np.ndarray:
     x (S, 9) (eq. 3; the WRIST row is eq. 4 since its T_wi = 0)."""
     px = distort_project(rig.K, rig.dist, markers_C(rig, R, x[:, :3]))
     return px.reshape(px.shape[0], -1)
+
+
+def measure(rig: Rig, R: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """(S, 3M): every marker's pixels (eq. 3) then every marker's depth e₃ᵀ X_C (the h_z of
+    eq. 13, used at every frame when depth frames exist)."""
+    X = markers_C(rig, R, x[:, :3])
+    px = distort_project(rig.K, rig.dist, X)
+    return np.hstack([px.reshape(px.shape[0], -1), X[..., 2]])
 
 
 def facing(rig: Rig, R: np.ndarray, T: np.ndarray) -> np.ndarray:

@@ -16,7 +16,7 @@ from armtrack_cli.core.wrist import ANGLES, wrist_angles_deg
 from armtrack_cli.filters import manifold_ukf as mu
 from armtrack_cli.filters.gaussian import SigmaPoints
 from armtrack_cli.fuse.association import associate
-from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig, facing, noise_cov, process, project
+from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig, facing, measure, noise_cov, process
 
 STATE_DIM = 12  # error state: φ (3), T (3), v (3), ω (3)
 NOISE_DIM = 6  # augmented noise: a (3), α (3)
@@ -54,11 +54,12 @@ def marker_area(blobs: np.ndarray, pixels: np.ndarray) -> float:
 def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmUkfSettings,
           image_area: float, area_px: float) -> PalmTrack:
     """Run the filter from frame ``start`` (the initialisation frame, neutral pose) on the
-    frame times t (K,) and each frame's blobs (B_k, 3): u, v (px), area (px²). Blobs larger
-    than s.merged_area × area_px (one marker's area) are merged markers, never used."""
+    frame times t (K,) and each frame's blobs (B_k, 4): u, v (px), area (px²), depth (m, NaN
+    without a reading). Blobs larger than s.merged_area × area_px (one marker's area) are
+    merged markers, never used."""
     K, M = t.size, rig.markers_H.shape[0]
     sp = SigmaPoints(STATE_DIM + NOISE_DIM, s.alpha, s.beta, s.kappa)
-    R_meas = s.pixel_sigma**2 * np.eye(2 * M)
+    R_meas = np.diag([s.pixel_sigma**2] * 2 * M + [s.depth_sigma_m**2] * M)
     out_R, out_x = np.full((K, 3, 3), np.nan), np.full((K, 9), np.nan)
     out_P = np.full((K, STATE_DIM, STATE_DIM), np.nan)
     used, coast = np.zeros(K, int), np.full(K, np.nan)
@@ -68,19 +69,24 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
         dt = t[k] - t[k - 1] if k > start else 1e-3  # from the frame times, not 0.03 s
         f = lambda R, x, w, dt=dt: process(R, x, w, dt)  # noqa: E731  (eq. 5)
         pr = mu.predict(st, f, noise_cov(s, dt), sp)
-        Z = project(rig, pr.Rs, pr.xs)  # eq. 9: every marker, every sigma point
+        Z = measure(rig, pr.Rs, pr.xs)  # eq. 9: every marker, every sigma point
         zm, Pzz, Pxz = mu.predicted_measurement(pr, Z, R_meas)  # eq. 10-11
         idx = np.arange(M)
-        S = Pzz.reshape(M, 2, M, 2)[idx, :, idx, :]
-        y = blobs[k][blobs[k][:, 2] <= s.merged_area * area_px, :2]
-        a = associate(y, zm.reshape(M, 2), S, facing(rig, pr.R, pr.x[:3]),
+        S = Pzz[:2 * M, :2 * M].reshape(M, 2, M, 2)[idx, :, idx, :]
+        single = blobs[k][:, 2] <= s.merged_area * area_px
+        y = blobs[k][single]
+        a = associate(y[:, :2], zm[:2 * M].reshape(M, 2), S, facing(rig, pr.R, pr.x[:3]),
                       prior_marker=s.prior_marker, prior_clutter=s.prior_clutter,
                       image_area=image_area, gate=s.gate, merge_px=s.merge_px)
-        mob[k][blobs[k][:, 2] <= s.merged_area * area_px] = a.marker_of_blob
+        mob[k][single] = a.marker_of_blob
         j = np.flatnonzero(a.blob_of_marker >= 0)
         if j.size:
-            rows = np.ravel(np.c_[2 * j, 2 * j + 1])
-            z = y[a.blob_of_marker[j]].ravel()
+            b = y[a.blob_of_marker[j]]
+            rows, z = np.ravel(np.c_[2 * j, 2 * j + 1]), b[:, :2].ravel()
+            if s.depth_updates:
+                zr = 2 * M + j
+                ok = np.isfinite(b[:, 3]) & ((b[:, 3] - zm[zr]) ** 2 <= s.gate * Pzz[zr, zr])
+                rows, z = np.r_[rows, zr[ok]], np.r_[z, b[ok, 3]]
             st = mu.correct(pr, z, zm[rows], Pzz[np.ix_(rows, rows)], Pxz[:, rows])
             last = t[k]
         else:

@@ -38,6 +38,16 @@ def kinematics_table(traj: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["measure", "value", "unit"])
 
 
+def _blob_depths(session: Session, blobs: list[np.ndarray], use: bool) -> list[np.ndarray]:
+    """Each frame's blobs with a 4th column: the depth under them (m), NaN without a frame."""
+    out = []
+    for i, b in enumerate(blobs):
+        p = depth_path(session.root, i)
+        z = depth_at(read_depth_png(p), b[:, :2]) if use and len(b) and p.exists() else None
+        out.append(np.c_[b, np.full(len(b), np.nan) if z is None else z])
+    return out
+
+
 def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, Any]:
     """`armtrack fuse SESSION --method ukf-palm` -> trajectory-, kinematics-,
     associations-ukf-palm.csv."""
@@ -52,7 +62,8 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
                         "run `armtrack calibrate SESSION` first")
     palm = read_palm_toml(dest / "palm.toml")
     video = probe_video(session.camera.video)
-    blobs = read_palm_blobs(dest / "detections.csv", video.n_frames)
+    blobs = _blob_depths(session, read_palm_blobs(dest / "detections.csv", video.n_frames),
+                         s.depth_updates)
     dpath = depth_path(session.root, palm.frame)
     z = depth_at(read_depth_png(dpath) if dpath.exists() else None, palm.pixels)
     init = initial_pose(palm.position_H, palm.pixels, z, K=cam.K, dist=cam.dist,
