@@ -91,3 +91,54 @@ def score(method: str, traj: pd.DataFrame, truth: TruthPose) -> PalmScore:
                                            for r in rom.itertuples()))
     return PalmScore(pd.DataFrame(pos, columns=list(COLUMNS)), pd.DataFrame(ang), meas,
                      excluded, "\n".join(lines))
+
+
+@dataclass(frozen=True)
+class AssociationScore:
+    """Marker-frames (frame, marker) from the start frame on: ``correct`` when the filter used
+    the marker's own blob, or used none where no blob of its own was there (hidden, turned
+    away, merged); ``wrong`` when it used another blob; ``missed`` when it used none although
+    the marker's own blob was there. ``clutter_used``: clutter blobs associated with a marker."""
+
+    marker_frames: int
+    correct: int
+    wrong: int
+    missed: int
+    clutter_used: int
+
+    @property
+    def accuracy(self) -> float:
+        return self.correct / max(self.marker_frames, 1)
+
+
+def association_score(blobs: list[np.ndarray], marker_of_blob: list[np.ndarray],
+                      marker_px: np.ndarray, visible: np.ndarray, clutter_px: np.ndarray, *,
+                      start: int = 0, tol_px: float = 2.5) -> AssociationScore:
+    """Score associations against simulated truth: blobs (B_k, ≥2) per frame, the filter's
+    marker of each blob (-1 none), true marker pixels (K, M, 2) and visibility (K, M), and
+    clutter pixels (C, 2) (NaN rows = absent)."""
+    n = good = wrong = missed = clut = 0
+    for k in range(start, len(blobs)):
+        b, mob = blobs[k][:, :2], marker_of_blob[k]
+        M = marker_px.shape[1]
+        own = np.full(M, -1)
+        if len(b):
+            d = np.linalg.norm(b[:, None] - marker_px[k][None], axis=-1)  # (B, M)
+            near = np.argmin(d, axis=0)
+            ok = visible[k] & (d[near, np.arange(M)] < tol_px)
+            shared = np.bincount(near[visible[k]], minlength=len(b))[near] > 1  # merged blob
+            own[ok & ~shared] = near[ok & ~shared]
+            dc = np.linalg.norm(b[:, None] - clutter_px[None], axis=-1)
+            clut += int(((np.nan_to_num(dc, nan=np.inf) < tol_px).any(axis=1) & (mob >= 0)).sum())
+        for j in range(M):
+            used = np.flatnonzero(mob == j)
+            n += 1
+            if used.size and used[0] == own[j]:
+                good += 1
+            elif used.size:
+                wrong += 1
+            elif own[j] >= 0:
+                missed += 1
+            else:
+                good += 1
+    return AssociationScore(n, good, wrong, missed, clut)

@@ -36,6 +36,18 @@ class PalmTrack:
     marker_of_blob: list
 
 
+LOST_SD = np.r_[[np.radians(15.0)] * 3, [0.02] * 3, [0.05] * 3, [0.5] * 3]
+
+
+def lost(st: mu.ManifoldState) -> mu.ManifoldState:
+    """No marker for longer than max_coast_s: hold the last pose at rest with a bounded
+    spread (15°, 2 cm) instead of letting the covariance grow past what the sigma points can
+    represent, so the markers can be picked up again when they return."""
+    x = st.x.copy()
+    x[3:] = 0.0
+    return mu.ManifoldState(st.R, x, np.diag(LOST_SD**2))
+
+
 def initial_state(s: PalmUkfSettings) -> mu.ManifoldState:
     """W0 is H at the start: R = I, T = 0, at rest; P0 from the initialisation's spread."""
     sd = np.r_[[np.deg2rad(s.init_sigma_deg)] * 3, [s.init_sigma_m] * 3, [0.02] * 3, [0.2] * 3]
@@ -67,6 +79,8 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
     st, last = initial_state(s), t[start]
     for k in range(start, K):
         dt = t[k] - t[k - 1] if k > start else 1e-3  # from the frame times, not 0.03 s
+        if t[k] - last > s.max_coast_s:
+            st = lost(st)
         f = lambda R, x, w, dt=dt: process(R, x, w, dt)  # noqa: E731  (eq. 5)
         pr = mu.predict(st, f, noise_cov(s, dt), sp)
         Z = measure(rig, pr.Rs, pr.xs)  # eq. 9: every marker, every sigma point
