@@ -42,6 +42,7 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
+	$(BIN)/python benchmarks/palm.py
 
 validate: $(STAMP)
 	$(BIN)/python validation/run.py

@@ -179,7 +179,10 @@ def fuse(sessions, recipe, method, particles, seed, sets, as_json, out_dir) -> N
                           sets=sets, out=_out_for(out_dir, folder, sessions))
         _emit(r, as_json, [f"{folder}: {r['method']}: {r['frames']} frames "
                            f"({r['detections_used']} with a detection), "
-                           f"{r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"])
+                           f"{r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"]
+              + ([f"  initialised from {r['initialised_from']}: residual "
+                  f"{r['init_residual_px']} px, {r['init_residual_mm']} mm"]
+                 if "init_residual_px" in r else []))
 
 
 @main.command()

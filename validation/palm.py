@@ -53,7 +53,7 @@ def _blobs(dest: Path, n: int):
 
 
 def score_session(folder: Path, dest: Path, r_fuse: dict) -> dict:
-    r = pipeline.compare(folder, out=dest)
+    pipeline.compare(folder, out=dest)
     truth = dict(np.load(folder.parent / f"{folder.name}.truth.npz"))
     traj = _read(dest / "trajectory-ukf-palm.csv")
     ang_err = _read(dest / "wrist-angle-errors.csv").set_index("angle")

@@ -10,7 +10,7 @@ to the error state, so noise that enters non-linearly (the attitude noise of eq.
 through the model with the state; the sigma points are perturbations of the mean,
     R_i = R · exp(φ_i^),  x_i = x + δx_i,  w_i,
 and the predicted mean rotation is the weighted Karcher mean found by iterated rotation
-averaging, R̄ ← R̄ · exp(Σ W_m^i log(R̄ᵀ R_i)) until the step is below 1e-12 rad.
+averaging, R̄ ← R̄ · exp(Σ W_m^i log(R̄ᵀ R_i)) until the step is below 1e-9 rad.
 The measurement update uses the propagated sigma points (eq. 9-11 of Cordella) and applies
 the correction on the manifold, R⁺ = R̄ · exp((K ν)_φ^).
 """
@@ -24,7 +24,7 @@ import numpy as np
 
 from armtrack_cli.filters.gaussian import SigmaPoints
 
-MEAN_TOL_RAD = 1e-12
+MEAN_TOL_RAD = 1e-9  # far below any error that matters; 1-2 iterations from the centre point
 MEAN_MAX_ITER = 20
 
 

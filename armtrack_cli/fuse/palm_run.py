@@ -77,6 +77,8 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
     used, coast = np.zeros(K, int), np.full(K, np.nan)
     mob: list = [np.full(len(b), -1) for b in blobs]
     st, last = initial_state(s), t[start]
+    two = 2 * np.arange(M)[:, None, None]
+    rr, cc = two + np.array([0, 1])[:, None], two + np.array([0, 1])[None, :]  # 2×2 blocks
     for k in range(start, K):
         dt = t[k] - t[k - 1] if k > start else 1e-3  # from the frame times, not 0.03 s
         if t[k] - last > s.max_coast_s:
@@ -85,8 +87,7 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
         pr = mu.predict(st, f, noise_cov(s, dt), sp)
         Z = measure(rig, pr.Rs, pr.xs)  # eq. 9: every marker, every sigma point
         zm, Pzz, Pxz = mu.predicted_measurement(pr, Z, R_meas)  # eq. 10-11
-        idx = np.arange(M)
-        S = Pzz[:2 * M, :2 * M].reshape(M, 2, M, 2)[idx, :, idx, :]
+        S = Pzz[rr, cc]  # (M, 2, 2): P_yy,j of each marker
         single = blobs[k][:, 2] <= s.merged_area * area_px
         y = blobs[k][single]
         a = associate(y[:, :2], zm[:2 * M].reshape(M, 2), S, facing(rig, pr.R, pr.x[:3]),
@@ -96,12 +97,12 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
         j = np.flatnonzero(a.blob_of_marker >= 0)
         if j.size:
             b = y[a.blob_of_marker[j]]
-            rows, z = np.ravel(np.c_[2 * j, 2 * j + 1]), b[:, :2].ravel()
+            rows, z = (2 * j[:, None] + np.array([0, 1])).ravel(), b[:, :2].ravel()
             if s.depth_updates:
                 zr = 2 * M + j
                 ok = np.isfinite(b[:, 3]) & ((b[:, 3] - zm[zr]) ** 2 <= s.gate * Pzz[zr, zr])
-                rows, z = np.r_[rows, zr[ok]], np.r_[z, b[ok, 3]]
-            st = mu.correct(pr, z, zm[rows], Pzz[np.ix_(rows, rows)], Pxz[:, rows])
+                rows, z = np.concatenate([rows, zr[ok]]), np.concatenate([z, b[ok, 3]])
+            st = mu.correct(pr, z, zm[rows], Pzz[rows[:, None], rows], Pxz[:, rows])
             last = t[k]
         else:
             st = mu.no_update(pr)
