@@ -242,3 +242,8 @@ def test_fuse_ukf_palm_without_calibrate_is_one_line(tmp_path, palm_session):
     assert r.exit_code == 1
     assert r.stderr.startswith("error: ") and "camera.yaml" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_simulate_hide_needs_marker_start_duration(tmp_path):
+    r = run_cli("simulate", tmp_path / "x", "--task", "wrist-rom", "--hide", "9:1:1")
+    assert r.exit_code == 2 and "MARKER:START:DURATION" in r.stderr

@@ -64,34 +64,27 @@ def hat(v: np.ndarray) -> np.ndarray:
 
 
 _I3 = np.eye(3)
-_DIAG = (np.arange(3), np.arange(3))
+_HAT = np.zeros((3, 9))  # hat(φ).ravel() = φ @ _HAT
+_HAT[0, [7, 5]], _HAT[1, [2, 6]], _HAT[2, [3, 1]] = (1, -1), (1, -1), (1, -1)
+_VEE = _HAT.T.copy()  # R.ravel() @ _VEE = (R32 − R23, R13 − R31, R21 − R12)
+_TRACE = _I3.ravel()
 
 
 def exp_so3(phi: np.ndarray) -> np.ndarray:
-    """Rodrigues: exp(φ^) = cos θ I + (1 − cos θ)/θ² φφᵀ + sin θ/θ φ^ for (..., 3) rotation
-    vectors -> (..., 3, 3) (series for θ < 1e-4)."""
+    """Rodrigues: exp(φ^) = cos θ I + (1 − cos θ)/θ² φφᵀ + sin θ/θ φ^ for (N, 3) or (3,)
+    rotation vectors -> (N, 3, 3) or (3, 3) (series for θ < 1e-4)."""
     phi = np.asarray(phi, float)
     if phi.ndim == 1:
         return _exp_one(phi)
-    th2 = np.einsum("...i,...i->...", phi, phi)
+    th2 = np.einsum("ni,ni->n", phi, phi)
     small = th2 < 1e-8
     th = np.sqrt(np.where(small, 1.0, th2))
     c = np.cos(th)
-    a = np.where(small, 1.0 - th2 / 6.0, np.sin(th) / th)
-    b = np.where(small, 0.5 - th2 / 24.0, (1.0 - c) / (th * th))
-    c = np.where(small, 1.0 - th2 / 2.0, c)
-    out = b[..., None, None] * (phi[..., :, None] * phi[..., None, :])
-    out[..., 0, 0] += c
-    out[..., 1, 1] += c
-    out[..., 2, 2] += c
-    s = a[..., None] * phi
-    out[..., 0, 1] -= s[..., 2]
-    out[..., 1, 0] += s[..., 2]
-    out[..., 0, 2] += s[..., 1]
-    out[..., 2, 0] -= s[..., 1]
-    out[..., 1, 2] -= s[..., 0]
-    out[..., 2, 1] += s[..., 0]
-    return out
+    a = np.where(small, 1.0 - th2 / 6.0, np.sin(th) / th)[:, None]
+    b = np.where(small, 0.5 - th2 / 24.0, (1.0 - c) / (th * th))[:, None]
+    c = np.where(small, 1.0 - th2 / 2.0, c)[:, None]
+    out = b * (phi[:, :, None] * phi[:, None, :]).reshape(-1, 9) + a * (phi @ _HAT) + c * _TRACE
+    return out.reshape(-1, 3, 3)
 
 
 def _exp_one(phi: np.ndarray) -> np.ndarray:
@@ -111,24 +104,21 @@ def _exp_one(phi: np.ndarray) -> np.ndarray:
 def log_so3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors (..., 3) of rotations (..., 3, 3), angle in [0, π]."""
     R = np.asarray(R, float)
-    tr = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
-    th = np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0))
-    v = np.empty(R.shape[:-1])
-    v[..., 0] = R[..., 2, 1] - R[..., 1, 2]
-    v[..., 1] = R[..., 0, 2] - R[..., 2, 0]
-    v[..., 2] = R[..., 1, 0] - R[..., 0, 1]
+    flat = R.reshape(-1, 9)
+    th = np.arccos(np.clip((flat @ _TRACE - 1.0) / 2.0, -1.0, 1.0))
+    v = flat @ _VEE
     small = th < 1e-4
     f = np.where(small, 0.5 + th * th / 12.0, th / (2.0 * np.sin(np.where(small, 1.0, th))))
-    out = f[..., None] * v
+    out = f[:, None] * v
     near_pi = th > np.pi - 1e-4  # the antisymmetric part vanishes: use the symmetric part
-    if np.any(near_pi):
-        B = (R[near_pi] + _I3) / 2.0
+    if near_pi.any():
+        B = (R.reshape(-1, 3, 3)[near_pi] + _I3) / 2.0
         k = np.argmax(np.diagonal(B, axis1=-2, axis2=-1), -1)
         axis = B[np.arange(len(k)), :, k]
         axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
         sgn = np.where(np.sum(axis * v[near_pi], -1) < 0, -1.0, 1.0)
         out[near_pi] = sgn[:, None] * axis * th[near_pi][:, None]
-    return out
+    return out.reshape(R.shape[:-2] + (3,))
 
 
 def rotation_mean(Rs: np.ndarray, W: np.ndarray, R0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
