@@ -68,18 +68,16 @@ def associate(y: np.ndarray, zm: np.ndarray, S: np.ndarray, usable: np.ndarray, 
         return Association(np.zeros(0, int), np.full(M, -1), lp)
     score = lp[:, 1:].copy()
     score[(m2 > gate) | ~usable[None, :]] = NO
-    # B × (M + B): markers, then one private clutter column per blob
-    cost = np.full((B, M + B), -NO)
+    cost = np.full((B, M + B), -NO)  # B × (M + B): markers, then a clutter column per blob
     cost[:, :M] = -score
     cost[np.arange(B), M + np.arange(B)] = -lp[:, 0]
     rows, cols = linear_sum_assignment(cost)
     marker_of_blob = np.full(B, -1)
-    for r, c in zip(rows, cols):
-        if c < M and score[r, c] > NO / 2:
-            marker_of_blob[r] = c
+    ok = (cols < M) & (score[rows, np.minimum(cols, M - 1)] > NO / 2)
+    marker_of_blob[rows[ok]] = cols[ok]
     sep = np.linalg.norm(zm[:, None] - zm[None], axis=-1) + np.eye(M) * 1e9
     merged = ((sep < merge_px) & usable[None, :]).any(axis=1) & usable
-    marker_of_blob[np.isin(marker_of_blob, np.flatnonzero(merged))] = -1  # gated out
+    marker_of_blob[(marker_of_blob >= 0) & merged[marker_of_blob]] = -1  # gated out
     i = np.flatnonzero(marker_of_blob >= 0)
     j = marker_of_blob[i]
     near = usable[None, :] & (sep[j] < 3 * merge_px)  # (n, M): j's neighbours k

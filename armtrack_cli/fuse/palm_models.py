@@ -80,11 +80,25 @@ def project(rig: Rig, R: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def measure(rig: Rig, R: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """(S, 3M): every marker's pixels (eq. 3) then every marker's depth e₃ᵀ X_C (the h_z of
-    eq. 13, used at every frame when depth frames exist)."""
-    X = markers_C(rig, R, x[:, :3])
-    px = distort_project(rig.K, rig.dist, X)
-    return np.hstack([px.reshape(px.shape[0], -1), X[..., 2]])
+    """(S, 3M): every marker's pixels u1 v1 u2 v2 … (eq. 3) then every marker's depth
+    e₃ᵀ X_C (the h_z of eq. 13, used at every frame when depth frames exist)."""
+    RC = rig.R_CW0 @ R  # (S, 3, 3): H in C
+    X = RC @ rig.markers_H.T + (x[:, :3] @ rig.R_CW0.T + rig.T_CW0)[:, :, None]  # (S, 3, M)
+    d = rig.dist
+    k1, k2, p1, p2 = d[0], d[1], d[2], d[3]
+    k3 = d[4] if d.size > 4 else 0.0
+    xn, yn = X[:, 0] / X[:, 2], X[:, 1] / X[:, 2]
+    r2 = xn * xn + yn * yn
+    rad = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    xy = xn * yn
+    xd = xn * rad + 2 * p1 * xy + p2 * (r2 + 2 * xn * xn)
+    yd = yn * rad + p1 * (r2 + 2 * yn * yn) + 2 * p2 * xy
+    K = rig.K
+    out = np.empty((R.shape[0], 3 * X.shape[2]))
+    out[:, 0:2 * X.shape[2]:2] = K[0, 0] * xd + K[0, 1] * yd + K[0, 2]
+    out[:, 1:2 * X.shape[2]:2] = K[1, 1] * yd + K[1, 2]
+    out[:, 2 * X.shape[2]:] = X[:, 2]
+    return out
 
 
 def facing(rig: Rig, R: np.ndarray, T: np.ndarray) -> np.ndarray:
