@@ -62,6 +62,9 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
                         "run `armtrack calibrate SESSION` first")
     palm = read_palm_toml(dest / "palm.toml")
     video = probe_video(session.camera.video)
+    if not 0 <= palm.frame < video.n_frames:
+        raise DataError(dest / "palm.toml", f"is from frame {palm.frame}, but the video has "
+                        f"{video.n_frames} frames", "run `armtrack calibrate SESSION` again")
     blobs = _blob_depths(session, read_palm_blobs(dest / "detections.csv", video.n_frames),
                          s.depth_updates)
     dpath = depth_path(session.root, palm.frame)
