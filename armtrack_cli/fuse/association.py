@@ -75,12 +75,13 @@ def associate(y: np.ndarray, zm: np.ndarray, S: np.ndarray, usable: np.ndarray, 
     marker_of_blob = np.full(B, -1)
     ok = (cols < M) & (score[rows, np.minimum(cols, M - 1)] > NO / 2)
     marker_of_blob[rows[ok]] = cols[ok]
-    sep = np.linalg.norm(zm[:, None] - zm[None], axis=-1) + np.eye(M) * 1e9
-    merged = ((sep < merge_px) & usable[None, :]).any(axis=1) & usable
+    dd = zm[:, None] - zm[None]
+    sep2 = np.einsum("jki,jki->jk", dd, dd) + np.eye(M) * 1e18  # squared separations, not self
+    merged = ((sep2 < merge_px**2) & usable[None, :]).any(axis=1) & usable
     marker_of_blob[(marker_of_blob >= 0) & merged[marker_of_blob]] = -1  # gated out
     i = np.flatnonzero(marker_of_blob >= 0)
     j = marker_of_blob[i]
-    near = usable[None, :] & (sep[j] < 3 * merge_px)  # (n, M): j's neighbours k
+    near = usable[None, :] & (sep2[j] < 9 * merge_px**2)  # (n, M): j's neighbours k
     if near.any():  # one blob over two merged markers: N(y − (ŷ_j + ŷ_k)/2, (S_j + S_k)/4)
         ll2, _ = _gauss2(y[i, None] - (zm[j, None] + zm[None]) / 2, (S[j, None] + S[None]) / 4)
         own = lp[i, 1 + j] - np.log(prior_marker / M)

@@ -108,15 +108,26 @@ def facing(rig: Rig, R: np.ndarray, T: np.ndarray) -> np.ndarray:
     return (eye_W0 - X) @ R[:, 2] > 0
 
 
+def _step_parts() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A(dt) = A0 + dt A1 + dt² A2 (15, 12) with [x, w] A = [x⁺, ψ]: the linear part of eq. 5
+    and the rotation increment ψ = ω dt + α dt²/2."""
+    A0, A1, A2, I = np.zeros((15, 12)), np.zeros((15, 12)), np.zeros((15, 12)), np.eye(3)
+    A0[0:3, 0:3] = A0[3:6, 3:6] = A0[6:9, 6:9] = I  # T, v, ω carried
+    A1[3:6, 0:3] = A1[9:12, 3:6] = A1[12:15, 6:9] = A1[6:9, 9:12] = I  # T += v dt, v += a dt,
+    A2[9:12, 0:3] = A2[12:15, 9:12] = 0.5 * I  # ω += α dt; T += a dt²/2; ψ = ω dt + α dt²/2
+    return A0, A1, A2
+
+
+_A0, _A1, _A2 = _step_parts()
+
+
 def process(R: np.ndarray, x: np.ndarray, w: np.ndarray, dt: float
             ) -> tuple[np.ndarray, np.ndarray]:
     """Eq. 1 integrated over dt with the noise constant over the step (eq. 5, exact for it):
     T⁺ = T + v dt + a dt²/2, v⁺ = v + a dt, R⁺ = R exp((ω dt + α dt²/2)^), ω⁺ = ω + α dt.
-    R (S,3,3), x (S,9), w (S,6) -> (R⁺, x⁺)."""
-    a, al = w[:, :3], w[:, 3:]
-    T, v, om = x[:, :3], x[:, 3:6], x[:, 6:9]
-    xn = np.hstack([T + v * dt + 0.5 * a * dt * dt, v + a * dt, om + al * dt])
-    return R @ exp_so3(om * dt + 0.5 * al * dt * dt), xn
+    R (S,3,3), x (S,9), w (S,6) = (a, α) -> (R⁺, x⁺)."""
+    out = np.hstack([x, w]) @ (_A0 + dt * _A1 + (dt * dt) * _A2)
+    return R @ exp_so3(out[:, 9:]), out[:, :9]
 
 
 def noise_cov(s: PalmUkfSettings, dt: float) -> np.ndarray:
