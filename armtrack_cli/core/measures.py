@@ -94,3 +94,10 @@ def measures(t: np.ndarray, wrist: np.ndarray, *, elbow: np.ndarray | None = Non
             out.update({"elbow_flexion_min": float(ang.min()), "elbow_flexion_max": float(ang.max()),
                         "elbow_flexion_rom": float(np.ptp(ang))})
     return out
+
+
+def kinematics_rows(t: np.ndarray, wrist: np.ndarray, *, elbow: np.ndarray | None = None,
+                    shoulder: np.ndarray | None = None) -> dict[str, list]:
+    """kinematics-METHOD.csv's columns: one row per measure (measure, value, unit)."""
+    m = measures(t, wrist, elbow=elbow, shoulder=shoulder)
+    return {"measure": list(m), "value": list(m.values()), "unit": [MEASURES[k] for k in m]}

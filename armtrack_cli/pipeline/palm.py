@@ -19,10 +19,10 @@ from armtrack_cli.core.wrist_measures import wrist_pose_measures
 from armtrack_cli.fuse.palm_init import depth_at, initial_pose
 from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig
 from armtrack_cli.fuse.palm_run import marker_area, track, trajectory_table
-from armtrack_cli.session.camera_yaml import read_camera_yaml
+from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, require
-from armtrack_cli.session.depth import depth_path, read_depth_png
-from armtrack_cli.session.outputs import write_table
+from armtrack_cli.session.depth import depth_path, read_depth_frame
+from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.palm_io import read_palm_blobs, read_palm_toml
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.recipe import section
@@ -42,8 +42,7 @@ def _blob_depths(session: Session, blobs: list[np.ndarray], use: bool) -> list[n
     """Each frame's blobs with a 4th column: the depth under them (m), NaN without a frame."""
     out = []
     for i, b in enumerate(blobs):
-        p = depth_path(session.root, i)
-        z = depth_at(read_depth_png(p), b[:, :2]) if use and len(b) and p.exists() else None
+        z = depth_at(read_depth_frame(session.root, i), b[:, :2]) if use and len(b) else None
         out.append(np.c_[b, np.full(len(b), np.nan) if z is None else z])
     return out
 
@@ -56,10 +55,7 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
                           "ukf-palm tracks the six palm markers of a Cordella session")
     require(session, "camera", "video")
     s = section(doc, "ukf_palm", PalmUkfSettings, where)
-    cam = read_camera_yaml(dest / "camera.yaml") if (dest / "camera.yaml").exists() else None
-    if cam is None or cam.R_WC is None:
-        raise DataError(dest / "camera.yaml", "not found or without R_WC/T_WC",
-                        "run `armtrack calibrate SESSION` first")
+    cam = read_calibrated_camera(dest / "camera.yaml")
     palm = read_palm_toml(dest / "palm.toml")
     video = probe_video(session.camera.video)
     if not 0 <= palm.frame < video.n_frames:
@@ -68,7 +64,7 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
     blobs = _blob_depths(session, read_palm_blobs(dest / "detections.csv", video.n_frames),
                          s.depth_updates)
     dpath = depth_path(session.root, palm.frame)
-    z = depth_at(read_depth_png(dpath) if dpath.exists() else None, palm.pixels)
+    z = depth_at(read_depth_frame(session.root, palm.frame), palm.pixels)
     init = initial_pose(palm.position_H, palm.pixels, z, K=cam.K, dist=cam.dist,
                         sigma_px=s.pixel_sigma, sigma_z=s.depth_sigma_m)  # eq. 13-20
     rig = Rig(cam.K, cam.dist, init.R_CW0, init.T_CW0, palm.position_H)
@@ -84,15 +80,16 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
            "residual_px": round(init.rms_px, 4), "residual_mm": round(init.rms_depth_mm, 4)
            if init.used_depth else None, "iterations": init.iterations}
     settings = {"recipe": where, "method": METHOD, **dataclasses.asdict(s), "initialisation": how}
-    write_table(dest / f"trajectory-{METHOD}.csv", table, command="fuse", settings=settings)
-    write_table(dest / f"kinematics-{METHOD}.csv", kinematics_table(table), command="fuse",
-                settings=settings)
     assoc = [(i, b, int(m)) for i, mob in enumerate(tr.marker_of_blob) for b, m in enumerate(mob)]
     names = np.array(("clutter",) + palm.markers)
-    write_table(dest / f"associations-{METHOD}.csv", pd.DataFrame(
-        {"frame": [a[0] for a in assoc], "blob": [a[1] for a in assoc],
-         "marker": names[[a[2] + 1 for a in assoc]] if assoc else []}), command="fuse",
-        settings={"method": METHOD})
+    assoc_table = pd.DataFrame({"frame": [a[0] for a in assoc], "blob": [a[1] for a in assoc],
+                                "marker": names[[a[2] + 1 for a in assoc]] if assoc else []})
+    with output_set():
+        write_table(dest / f"trajectory-{METHOD}.csv", table, command="fuse", settings=settings)
+        write_table(dest / f"kinematics-{METHOD}.csv", kinematics_table(table), command="fuse",
+                    settings=settings)
+        write_table(dest / f"associations-{METHOD}.csv", assoc_table, command="fuse",
+                    settings={"method": METHOD})
     n = video.n_frames - palm.frame
     return {"method": METHOD, "trajectory": str(dest / f"trajectory-{METHOD}.csv"),
             "frames": n, "detections_used": int((tr.used > 0).sum()),
@@ -119,19 +116,17 @@ def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict
     cols = select_markers(qtm, {m: gt.markers[m] for m in session.palm.markers}, session.toml_path)
     xyz = np.stack([to_world(qtm.xyz[:, cols[m]], gt.to_world) for m in session.palm.markers], 1)
     t = traj["t"].to_numpy()
-    t_q = qtm.t + session.sync.groundtruth_offset_s  # session time = Qualisys time + offset
+    t_q = qtm.t + session.offset_s("groundtruth_offset_s")  # session time = stream time + offset
     if t_q[0] > np.nanmax(t) or t_q[-1] < np.nanmin(t):
         raise DataError(gt.file, f"does not overlap trajectory-{METHOD}.csv in time",
                         "check [sync] groundtruth_offset_s")
     truth = cmp.truth_pose(t, t_q, xyz, qtm.rate_hz, session.palm.markers, session.meta.side,
                            start_t=float(t[np.isfinite(traj["wrist_x"].to_numpy())][0]))
     res = cmp.score(METHOD, traj, truth)
-    write_table(dest / "errors.csv", res.position, command="compare",
-                settings={"methods": [METHOD]})
-    write_table(dest / "wrist-angle-errors.csv", res.angles, command="compare",
-                settings={"methods": [METHOD]})
-    write_table(dest / "measures.csv", res.measures, command="compare",
-                settings={"methods": [METHOD]})
+    with output_set():
+        for name, tab in (("errors.csv", res.position), ("wrist-angle-errors.csv", res.angles),
+                          ("measures.csv", res.measures)):
+            write_table(dest / name, tab, command="compare", settings={"methods": [METHOD]})
     return {"errors": str(dest / "errors.csv"), "measures": str(dest / "measures.csv"),
             "angle_errors": str(dest / "wrist-angle-errors.csv"), "methods": [METHOD],
             "excluded_frames": {f"{METHOD}/wrist": res.excluded}, "table": res.text,
