@@ -231,8 +231,14 @@ def test_ukf_palm_end_to_end_against_truth(palm_session):
                           np.array([truth["clutter_px"], truth["clutter2_px"]]))
     assert a.accuracy >= 0.99 and a.clutter_used == 0 and a.wrong == 0, a
     kin = pd.read_csv(out / "kinematics-ukf-palm.csv", comment="#").set_index("measure")
-    assert {"flexion_rom", "deviation_rom_p5_p95", "pronation_peak_speed",
-            "wrist_path_length"} <= set(kin.index)
+    assert {"wrist_flexion_rom", "wrist_deviation_rom_p5_p95", "wrist_pronation_peak_speed",
+            "wrist_flexion_mean_speed", "wrist_path_length", "wrist_peak_speed"} <= set(kin.index)
+    meas = pd.read_csv(out / "measures.csv", comment="#")
+    rom = meas[(meas.segment == "session") & meas.measure.str.match(r"wrist_(flexion|deviation)_rom$")]
+    # this 7-s session moves 55° in a third of a second, three times faster than the 12-s
+    # sessions of validation/palm.py, where the 2° goal is met; here the filter overshoots by
+    # up to 3° at the fastest reversals
+    assert len(rom) == 2 and (rom["error"].abs() <= 3.0).all(), rom
     assert "ukf-palm" in run_cli("info", folder, "--json").stdout
 
 

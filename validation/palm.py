@@ -57,7 +57,8 @@ def score_session(folder: Path, dest: Path, r_fuse: dict) -> dict:
     truth = dict(np.load(folder.parent / f"{folder.name}.truth.npz"))
     traj = _read(dest / "trajectory-ukf-palm.csv")
     ang_err = _read(dest / "wrist-angle-errors.csv").set_index("angle")
-    meas = _read(dest / "measures.csv").set_index("measure")
+    meas = _read(dest / "measures.csv")
+    meas = meas[meas["segment"] == "session"].set_index("measure")
     pos = _read(dest / "errors.csv").set_index("axis")
     n = len(traj)
     blobs, mob = _blobs(dest, n)
@@ -72,9 +73,9 @@ def score_session(folder: Path, dest: Path, r_fuse: dict) -> dict:
             **{f"{k}_rmse_deg": float(ang_err.loc[k, "rmse_deg"]) for k in
                ("flexion", "deviation", "pronation")},
             "wrist_rmse_mm": float(pos.loc["3d", "rmse_cm"]) * 10,
-            **{f"{k}_rom_err_deg": float(meas.loc[f"{k}_rom", "difference"]) for k in
+            **{f"{k}_rom_err_deg": float(meas.loc[f"wrist_{k}_rom", "error"]) for k in
                ("flexion", "deviation", "pronation")},
-            **{f"{k}_rom_p5_p95_err_deg": float(meas.loc[f"{k}_rom_p5_p95", "difference"])
+            **{f"{k}_rom_p5_p95_err_deg": float(meas.loc[f"wrist_{k}_rom_p5_p95", "error"])
                for k in ("flexion", "deviation", "pronation")},
             "assoc_pct": 100 * a.accuracy, "assoc_wrong": a.wrong, "assoc_missed": a.missed,
             "clutter_used": a.clutter_used, "max_err_occlusion_deg": float(np.nanmax(e[occl])),

@@ -14,7 +14,7 @@ import click
 
 from armtrack_cli import __version__
 from armtrack_cli.cli import text
-from armtrack_cli.cli.batch import each, emit, progress
+from armtrack_cli.cli.batch import each, emit, expand, out_for, progress
 from armtrack_cli.core.errors import ArmtrackError
 from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
@@ -211,6 +211,23 @@ def compare(sessions, methods, as_json, out_dir) -> None:
             text.compare_lines(folder, r)
 
     each(sessions, out_dir, as_json, work)
+
+
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="The PDF to write "
+              "(default: report.pdf in the work folder of the latest session).")
+@json_option
+@out_option
+def report(sessions, output, as_json, out_dir) -> None:
+    """The clinician PDF (A4): page 1 in plain words, trajectories, accuracy against the
+    reference, wrist angles; several sessions of one subject make one report with their
+    progress."""
+    from armtrack_cli import pipeline
+
+    folders = expand(sessions)
+    r = pipeline.report([(f, out_for(out_dir, f, sessions)) for f in folders], output=output)
+    emit(r, as_json, [f"{', '.join(r['sessions'])} -> {r['report']}"])
 
 
 @main.command()

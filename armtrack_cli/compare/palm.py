@@ -12,7 +12,7 @@ import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, error_rows, table_one, truth_at
 from armtrack_cli.core.wrist import ANGLES, hand_frame, wrist_angles_deg
-from armtrack_cli.core.wrist_measures import wrist_pose_measures
+from armtrack_cli.core.wrist_measures import angular_speeds
 
 NEUTRAL_S = 1.0
 
@@ -27,7 +27,7 @@ class TruthPose:
 class PalmScore:
     position: pd.DataFrame  # errors.csv rows (cm)
     angles: pd.DataFrame  # per angle: mean, SD, RMSE, max |error| (deg), n
-    measures: pd.DataFrame  # measure, unit, estimate, truth, difference
+    speed_rows: list  # measures.csv rows: each angle's peak and mean speed, estimate and truth
     excluded: int  # estimated frames without ground truth
     text: str
 
@@ -77,19 +77,19 @@ def score(method: str, traj: pd.DataFrame, truth: TruthPose) -> PalmScore:
         truth.angles_deg).all(1)
     excluded = int((np.isfinite(est_w).all(1) & ~ok).sum())
     mask = lambda a: np.where(ok[:, None], a, np.nan)  # noqa: E731  (the same frames for both)
-    m_est = wrist_pose_measures(t, mask(est_w), mask(est_a))
-    m_tru = wrist_pose_measures(t, mask(truth.wrist), mask(truth.angles_deg))
-    meas = pd.DataFrame([{"method": method, "measure": a[0], "unit": a[2], "estimate": a[1],
-                          "truth": b[1], "difference": a[1] - b[1]}
-                         for a, b in zip(m_est, m_tru)])
+    speeds = [{"method": method, "measure": e[0], "segment": "session", "unit": e[2],
+               "estimate": e[1], "estimate_sd": np.nan, "truth": tr[1], "error": e[1] - tr[1],
+               "error_pct": 100 * (e[1] - tr[1]) / abs(tr[1]) if tr[1] else np.nan}
+              for e, tr in zip(angular_speeds(t, mask(est_a)), angular_speeds(t, mask(truth.angles_deg)))]
     lines = [table_one(pos, "wrist"), "", "wrist angle error (deg)   mean     SD   RMSE    max"]
     for r in ang:
         lines.append(f"  {r['angle']:<22} {r['mean_deg']:6.2f} {r['std_deg']:6.2f} "
                      f"{r['rmse_deg']:6.2f} {r['max_abs_deg']:6.2f}")
-    rom = meas[meas["measure"].str.endswith("_rom")]
-    lines.append("RoM (deg)  " + ", ".join(f"{r.measure[:-4]} {r.estimate:.1f} vs {r.truth:.1f}"
-                                           for r in rom.itertuples()))
-    return PalmScore(pd.DataFrame(pos, columns=list(COLUMNS)), pd.DataFrame(ang), meas,
+    rom = [(n, np.ptp(mask(est_a)[ok, k]), np.ptp(mask(truth.angles_deg)[ok, k]))
+           for k, n in enumerate(ANGLES)] if ok.any() else []
+    lines.append("RoM, max − min (deg): " + ", ".join(f"{n} {e:.1f} (truth {g:.1f})"
+                                                       for n, e, g in rom))
+    return PalmScore(pd.DataFrame(pos, columns=list(COLUMNS)), pd.DataFrame(ang), speeds,
                      excluded, "\n".join(lines))
 
 

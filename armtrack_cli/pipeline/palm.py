@@ -13,12 +13,19 @@ import numpy as np
 import pandas as pd
 
 from armtrack_cli.compare import palm as cmp
+from armtrack_cli.compare.errors import truth_at
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.wrist import ANGLES
-from armtrack_cli.core.wrist_measures import wrist_pose_measures
+from armtrack_cli.core.wrist_measures import angular_speeds
 from armtrack_cli.fuse.palm_init import depth_at, initial_pose
 from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig
 from armtrack_cli.fuse.palm_run import marker_area, track, trajectory_table
+from armtrack_cli.pipeline.kinematics import (
+    kinematics_table,
+    measure_comparison,
+    trajectory_inputs,
+    truth_inputs,
+)
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, require
 from armtrack_cli.session.depth import depth_path, read_depth_frame
@@ -26,16 +33,24 @@ from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.palm_io import read_palm_blobs, read_palm_toml
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.recipe import section
-from armtrack_cli.session.tables import read_trajectory
+from armtrack_cli.session.tables import read_kinematics, read_trajectory
 from armtrack_cli.session.video import probe_video
 
 METHOD = "ukf-palm"
 
 
-def kinematics_table(traj: pd.DataFrame) -> pd.DataFrame:
-    rows = wrist_pose_measures(traj["t"].to_numpy(), traj[["wrist_x", "wrist_y", "wrist_z"]]
-                               .to_numpy(), traj[[f"{a}_deg" for a in ANGLES]].to_numpy())
-    return pd.DataFrame(rows, columns=["measure", "value", "unit"])
+def palm_kinematics(traj: pd.DataFrame, session: Session) -> pd.DataFrame:
+    """kinematics-ukf-palm.csv: the measures package's table (RoM of each angle as max − min
+    and 5th-95th percentile, path length, peak and mean speed, …) and each angle's peak and
+    mean angular speed (core/wrist_measures.py) in the same shape."""
+    kin = kinematics_table(traj, session)
+    t = traj["t"].to_numpy()
+    ok = np.isfinite(t) & traj["wrist_x"].notna().to_numpy()
+    span = (float(t[ok][0]), float(t[ok][-1])) if ok.any() else (np.nan, np.nan)
+    rows = [{"measure": m, "segment": "session", "value": f"{v:.6f}", "sd": np.nan, "unit": u,
+             "t_start": span[0], "t_end": span[1]}
+            for m, v, u in angular_speeds(t, traj[[f"{a}_deg" for a in ANGLES]].to_numpy())]
+    return pd.concat([kin, pd.DataFrame(rows, columns=kin.columns)], ignore_index=True)
 
 
 def _blob_depths(session: Session, blobs: list[np.ndarray], use: bool) -> list[np.ndarray]:
@@ -86,8 +101,8 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
                                 "marker": names[[a[2] + 1 for a in assoc]] if assoc else []})
     with output_set():
         write_table(dest / f"trajectory-{METHOD}.csv", table, command="fuse", settings=settings)
-        write_table(dest / f"kinematics-{METHOD}.csv", kinematics_table(table), command="fuse",
-                    settings=settings)
+        write_table(dest / f"kinematics-{METHOD}.csv", palm_kinematics(table, session),
+                    command="fuse", settings=settings)
         write_table(dest / f"associations-{METHOD}.csv", assoc_table, command="fuse",
                     settings={"method": METHOD})
     n = video.n_frames - palm.frame
@@ -123,9 +138,15 @@ def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict
     truth = cmp.truth_pose(t, t_q, xyz, qtm.rate_hz, session.palm.markers, session.meta.side,
                            start_t=float(t[np.isfinite(traj["wrist_x"].to_numpy())][0]))
     res = cmp.score(METHOD, traj, truth)
+    markers = {m: truth_at(t, t_q, xyz[:, k], qtm.rate_hz)
+               for k, m in enumerate(session.palm.markers)}
+    mrows = measure_comparison(METHOD, read_kinematics(dest / f"kinematics-{METHOD}.csv"),
+                               truth_inputs(trajectory_inputs(traj, session), session, markers))
+    speeds = {r["measure"] for r in res.speed_rows}
+    mrows = [r for r in mrows if r["measure"] not in speeds] + res.speed_rows
     with output_set():
         for name, tab in (("errors.csv", res.position), ("wrist-angle-errors.csv", res.angles),
-                          ("measures.csv", res.measures)):
+                          ("measures.csv", pd.DataFrame(mrows))):
             write_table(dest / name, tab, command="compare", settings={"methods": [METHOD]})
     return {"errors": str(dest / "errors.csv"), "measures": str(dest / "measures.csv"),
             "angle_errors": str(dest / "wrist-angle-errors.csv"), "methods": [METHOD],
