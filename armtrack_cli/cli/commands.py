@@ -296,6 +296,8 @@ def run(sessions, through, methods, recipe, seed, sets, force, as_json, out_dir)
 @click.option("--no-distortion", is_flag=True, help="An ideal pinhole lens.")
 @click.option("--calib-images", type=click.IntRange(0, 60), default=0, show_default=True,
               help="Also film the board from N angles into calib/ (intrinsics = \"calib/\").")
+@click.option("--recorded", type=click.DateTime(["%Y-%m-%dT%H:%M:%S", "%Y-%m-%d"]),
+              help="When the session was recorded (arm tasks), e.g. 2026-11-27T10:15:00.")
 @click.option("--undeclared-imu-offset", is_flag=True,
               help="Write imu_offset_s = \"auto\" (the truth file keeps the real offset).")
 @click.option("--hide", "hides", multiple=True, metavar="MARKER:START:DURATION",
@@ -307,8 +309,8 @@ def run(sessions, through, methods, recipe, seed, sets, force, as_json, out_dir)
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
-             distractor, occlusions, no_distortion, calib_images, undeclared_imu_offset, hides,
-             clutter2, force, as_json, out_dir) -> None:
+             distractor, occlusions, no_distortion, calib_images, recorded, undeclared_imu_offset,
+             hides, clutter2, force, as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
     occ = []
@@ -336,7 +338,8 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
             imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
             drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
             distractor=distractor, occlusions=tuple(occ), distortion=not no_distortion,
-            declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images)
+            declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images,
+            **({"recorded": recorded.strftime("%Y-%m-%dT%H:%M:%S")} if recorded else {}))
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
     n_frames = int(round(duration * fps))
     with progress(n_frames, "rendering", quiet=as_json) as bar:
