@@ -12,7 +12,7 @@ import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, error_rows, table_one, truth_at
 from armtrack_cli.core.wrist import ANGLES, hand_frame, wrist_angles_deg
-from armtrack_cli.core.wrist_measures import angular_speeds
+from armtrack_cli.core.wrist_measures import angular_speeds, lowpass
 
 NEUTRAL_S = 1.0
 
@@ -53,17 +53,32 @@ def truth_pose(t: np.ndarray, t_q: np.ndarray, xyz: np.ndarray, rate_hz: float,
     return TruthPose(wrist, ang)
 
 
-def _angle_rows(method: str, est: np.ndarray, truth: np.ndarray) -> list[dict]:
+def _rom(x: np.ndarray) -> tuple[float, float]:
+    """(max − min, 95th − 5th percentile) of x, NaN when empty."""
+    if not x.size:
+        return np.nan, np.nan
+    return float(np.ptp(x)), float(np.subtract(*np.percentile(x, [95, 5])))
+
+
+def _angle_rows(method: str, t: np.ndarray, est: np.ndarray, truth: np.ndarray) -> list[dict]:
+    """Per angle: the error's statistics, and the RoM of estimate and truth over the frames
+    where both exist (truth from the six markers, core/wrist.py), both low-passed at 6 Hz as
+    the kinematic measures are (marker noise would otherwise widen the truth's max − min)."""
     rows = []
     for k, name in enumerate(ANGLES):
         ok = np.isfinite(est[:, k]) & np.isfinite(truth[:, k])
         e = est[ok, k] - truth[ok, k]
         n = int(e.size)
+        (re, pe) = _rom(lowpass(t, np.where(ok, est[:, k], np.nan))[ok])
+        (rt, pt) = _rom(lowpass(t, np.where(ok, truth[:, k], np.nan))[ok])
         rows.append({"method": method, "angle": name,
                      "mean_deg": float(e.mean()) if n else np.nan,
                      "std_deg": float(e.std(ddof=1)) if n > 1 else np.nan,
                      "rmse_deg": float(np.sqrt(np.mean(e**2))) if n else np.nan,
-                     "max_abs_deg": float(np.abs(e).max()) if n else np.nan, "n": n})
+                     "max_abs_deg": float(np.abs(e).max()) if n else np.nan,
+                     "rom_deg": re, "rom_truth_deg": rt, "rom_error_deg": re - rt,
+                     "rom_p5_p95_deg": pe, "rom_p5_p95_truth_deg": pt,
+                     "rom_p5_p95_error_deg": pe - pt, "n": n})
     return rows
 
 
@@ -72,7 +87,7 @@ def score(method: str, traj: pd.DataFrame, truth: TruthPose) -> PalmScore:
     est_w = traj[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
     est_a = traj[[f"{a}_deg" for a in ANGLES]].to_numpy()
     pos = error_rows(method, "wrist", est_w, truth.wrist)
-    ang = _angle_rows(method, est_a, truth.angles_deg)
+    ang = _angle_rows(method, t, est_a, truth.angles_deg)
     ok = np.isfinite(est_w).all(1) & np.isfinite(truth.wrist).all(1) & np.isfinite(
         truth.angles_deg).all(1)
     excluded = int((np.isfinite(est_w).all(1) & ~ok).sum())
@@ -85,10 +100,8 @@ def score(method: str, traj: pd.DataFrame, truth: TruthPose) -> PalmScore:
     for r in ang:
         lines.append(f"  {r['angle']:<22} {r['mean_deg']:6.2f} {r['std_deg']:6.2f} "
                      f"{r['rmse_deg']:6.2f} {r['max_abs_deg']:6.2f}")
-    rom = [(n, np.ptp(mask(est_a)[ok, k]), np.ptp(mask(truth.angles_deg)[ok, k]))
-           for k, n in enumerate(ANGLES)] if ok.any() else []
-    lines.append("RoM, max − min (deg): " + ", ".join(f"{n} {e:.1f} (truth {g:.1f})"
-                                                       for n, e, g in rom))
+    lines.append("RoM, max − min (deg): " + ", ".join(
+        f"{r['angle']} {r['rom_deg']:.1f} (truth {r['rom_truth_deg']:.1f})" for r in ang))
     return PalmScore(pd.DataFrame(pos, columns=list(COLUMNS)), pd.DataFrame(ang), speeds,
                      excluded, "\n".join(lines))
 
