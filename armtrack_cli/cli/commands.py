@@ -300,14 +300,17 @@ def run(sessions, through, methods, recipe, seed, sets, force, as_json, out_dir)
               help="When the session was recorded (arm tasks), e.g. 2026-11-27T10:15:00.")
 @click.option("--undeclared-imu-offset", is_flag=True,
               help="Write imu_offset_s = \"auto\" (the truth file keeps the real offset).")
+@click.option("--hide", "hides", multiple=True, metavar="MARKER:START:DURATION",
+              help="Palm tasks: hide palm marker MARKER (index 0-5) from START for DURATION s.")
+@click.option("--clutter2", type=Finite(0.0, 3600.0), metavar="START",
+              help="Palm tasks: a second clutter blob appears beside the hand at START s.")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
              distractor, occlusions, no_distortion, calib_images, recorded, undeclared_imu_offset,
-             force,
-             as_json, out_dir) -> None:
+             hides, clutter2, force, as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
     occ = []
@@ -327,7 +330,8 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     if task in ("wrist-rom", "reach-grasp"):
         settings = pipeline.PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
                                    qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
-                                   distortion=not no_distortion, calib_images=calib_images)
+                                   distortion=not no_distortion, calib_images=calib_images,
+                                   hide=tuple(_parse_hide(h) for h in hides), clutter2_s=clutter2)
     else:
         settings = pipeline.ArmSimSettings(
             task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
@@ -342,6 +346,17 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
         result = pipeline.simulate(target, settings, imu_format=imu_format, force=force,
                                    on_frame=bar)
     emit(result, as_json, text.simulate_lines(result))
+
+
+def _parse_hide(spec: str) -> tuple[int, float, float]:
+    try:
+        k, a, d = spec.split(":")
+        if not (0 <= int(k) <= 5 and 0 <= float(a) <= 3600 and 0 < float(d) <= 3600):
+            raise ValueError
+        return int(k), float(a), float(d)
+    except ValueError:
+        raise click.BadParameter(f"{spec!r} is not MARKER:START:DURATION (MARKER 0-5)",
+                                 param_hint="--hide") from None
 
 
 def render_reference() -> str:

@@ -30,7 +30,9 @@ def detect_lines(folder: str, r: dict[str, Any]) -> list[str]:
 
 def fuse_lines(folder: str, r: dict[str, Any]) -> list[str]:
     return [f"{folder}: {r['method']}: {r['frames']} frames ({r['detections_used']} with a "
-            f"detection), {r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"]
+            f"detection), {r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"] + (
+        [f"  initialised from {r['initialised_from']}: residual {r['init_residual_px']} px, "
+         f"{r['init_residual_mm']} mm"] if "init_residual_px" in r else [])
 
 
 def compare_lines(folder: str, r: dict[str, Any]) -> list[str]:

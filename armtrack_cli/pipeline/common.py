@@ -8,7 +8,8 @@ from typing import Any
 from armtrack_cli.session.config import Session
 from armtrack_cli.session.recipe import apply_overrides, known_sections, load_recipe
 
-RECIPE_SECTIONS = ("calibrate", "detect.patch", "detect.palm", "fuse", "fuse.pf", "fuse.models")
+RECIPE_SECTIONS = ("calibrate", "detect.patch", "detect.palm", "fuse", "fuse.pf", "fuse.models",
+                   "ukf_palm")
 
 
 def out_dir(session: Session, override: str | Path | None) -> Path:

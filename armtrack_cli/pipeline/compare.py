@@ -13,6 +13,7 @@ from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.methods import METHODS
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
+from armtrack_cli.pipeline.palm import compare_palm
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
@@ -34,6 +35,8 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
             out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
     require(session, "groundtruth")
+    if session.palm is not None:  # Cordella et al.: pipeline/palm.py
+        return compare_palm(session, out_dir(session, out), methods)
     work = WorkFolder(out_dir(session, out))
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:

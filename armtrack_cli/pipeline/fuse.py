@@ -14,12 +14,14 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
+from armtrack_cli.core.methods import PALM_METHODS
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.kinematics import kinematics_table
+from armtrack_cli.pipeline.palm import fuse_palm
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
@@ -88,6 +90,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
          out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
     s, where = settings_for(recipe, sets, method=method, particles=particles, seed=seed)
+    if s.method in PALM_METHODS:  # Cordella et al.: pipeline/palm.py
+        return fuse_palm(session, out_dir(session, out), *resolve_recipe(recipe, sets))
     if s.method == "pf-constraint" and session.arm is None:
         raise ConfigError(session.toml_path, "has no [arm] section, which pf-constraint needs",
                           "use inertial, ekf, ukf or pf, or add the arm model")

@@ -108,7 +108,9 @@ def _simulate_palm(out: Path, settings, *, force: bool, on_frame) -> dict[str, A
     sim = palm_session.simulate_palm(settings)
     cmd = f"armtrack simulate {out.name} --task {settings.task} --seed {settings.seed}" + (
         f" --duration {settings.duration_s:g}" if settings.duration_s != 20.0 else "") + (
-        f" --calib-images {settings.calib_images}" if settings.calib_images else "")
+        f" --calib-images {settings.calib_images}" if settings.calib_images else "") + "".join(
+        f" --hide {k}:{a:g}:{d:g}" for k, a, d in settings.hide) + (
+        f" --clutter2 {settings.clutter2_s:g}" if settings.clutter2_s is not None else "")
     with staged_folder(out, force=force) as tmp:
         write_text(tmp / "session.toml", palm_session.session_toml(settings, session_id=out.name,
                                                                    command=cmd))

@@ -24,6 +24,7 @@ from armtrack_cli.simulate.render_hand import draw_hand
 from armtrack_cli.vision.charuco import make_board
 
 CLUTTER_W = np.array([0.56, 0.02, 0.0])
+CLUTTER2_W = np.array([0.33, 0.10, 0.0])  # on the table 7 cm from the hand's ulnar side
 COLOUR_HSV = ((100, 150, 60), (130, 255, 255))
 
 
@@ -32,6 +33,7 @@ class PalmSimSettings(CaptureSettings):
     task: str = "wrist-rom"
     clutter: bool = True
     hide: tuple[tuple[int, float, float], ...] = ()  # (marker index, start s, duration s)
+    clutter2_s: float | None = None  # a second clutter blob appears at this time (s)
 
 
 @dataclass(frozen=True)
@@ -51,9 +53,12 @@ class PalmSimulation:
         for i, t in enumerate(tr["frame_t"]):
             gain, n = noise(t)
             hidden = tuple(k for k, a, d in s.hide if a <= t < a + d)
+            clutter = CLUTTER_W if s.clutter else None
+            if s.clutter2_s is not None and t >= s.clutter2_s:
+                clutter = np.stack([CLUTTER_W, CLUTTER2_W]) if s.clutter else CLUTTER2_W[None]
             img, _, depth = draw_hand(self.scene, wrist=tr["frame_wrist"][i], q_WH=tr["frame_q_WH"][i],
                                       q_WF=tr["q_WF"], palm_H=self.palm_H,
-                                      clutter_W=CLUTTER_W if s.clutter else None, hidden=hidden,
+                                      clutter_W=clutter, hidden=hidden,
                                       gain=gain, noise=n, rng=depth_rng)
             yield i, img, depth
 
@@ -105,6 +110,9 @@ def simulate_palm(s: PalmSimSettings) -> PalmSimulation:
         "palm_H": palm_H, "q_WF": motion.q_WF, "groundtruth_offset_s": s.groundtruth_offset_s,
         "K": cam.K, "dist": cam.dist, "R_WC": cam.R_WC, "T_WC": cam.T_WC,
     }
+    if s.clutter2_s is not None:  # only then, so sessions without it keep their bytes
+        truth.update({"clutter2_px": project(cam, CLUTTER2_W[None])[0][0],
+                      "clutter2_t0": float(s.clutter2_s)})
     return PalmSimulation(s, cam, {"t": tq - s.groundtruth_offset_s, "xyz": xyz_q,
                                    "names": list(hand.MARKERS)}, truth, scene, palm_H)
 

@@ -31,8 +31,8 @@ def draw_hand(scene: Scene, *, wrist, q_WH, q_WF, palm_H, clutter_W=None, hidden
     img = scene.background.copy()
     label = np.zeros(img.shape[:2], np.uint8)  # 1 forearm, 2 hand
     eye = cam.centre_W
-    if clutter_W is not None:
-        _poly(img, project(cam, _disc(clutter_W, np.array([0, 0, 1.0]), 0.01))[0], MARKER_BGR)
+    for c in (() if clutter_W is None else np.atleast_2d(clutter_W)):  # (3,) or (k, 3)
+        _poly(img, project(cam, _disc(c, np.array([0, 0, 1.0]), 0.01))[0], MARKER_BGR)
     xF = quat.rotate(q_WF, [1.0, 0, 0])
     elbow_side = wrist - 0.26 * xF - np.array([0, 0, 0.01])
     _limb(img, cam, elbow_side, wrist, 0.03, SLEEVE * 0.6 + SKIN * 0.4)
