@@ -14,7 +14,7 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
-from armtrack_cli.core.methods import PALM_METHODS
+from armtrack_cli.core.methods import DEFAULT_FOR_KIND, PALM_METHODS
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
@@ -32,10 +32,14 @@ from armtrack_cli.session.video import probe_video
 
 
 def settings_for(recipe: str | None, sets: tuple[str, ...], *, method: str | None = None,
-                 particles: int | None = None, seed: int | None = None
-                 ) -> tuple[FuseSettings, str]:
-    """[fuse] from defaults < recipe < --set < explicit flags, checked; and where it came from."""
+                 particles: int | None = None, seed: int | None = None,
+                 kind: str | None = None) -> tuple[FuseSettings, str]:
+    """[fuse] from defaults < recipe < --set < explicit flags, checked; and where it came from.
+    With ``kind`` (a session's), the method that neither a flag nor the recipe names is that
+    kind's default (pf-constraint for arm sessions, ukf-palm for palm sessions)."""
     doc, where = resolve_recipe(recipe, sets)
+    if method is None and kind is not None and "method" not in doc.get("fuse", {}):
+        method = DEFAULT_FOR_KIND[kind]
     s = with_flags(section(doc, "fuse", FuseSettings, where), method=method,
                    particles=particles, seed=seed)
     return checked(s, where), where
@@ -89,7 +93,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
          seed: int | None = None, recipe: str | None = None, sets: tuple[str, ...] = (),
          out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
-    s, where = settings_for(recipe, sets, method=method, particles=particles, seed=seed)
+    s, where = settings_for(recipe, sets, method=method, particles=particles, seed=seed,
+                            kind=session.kind)
     if s.method in PALM_METHODS:  # Cordella et al.: pipeline/palm.py
         return fuse_palm(session, out_dir(session, out), *resolve_recipe(recipe, sets))
     if s.method == "pf-constraint" and session.arm is None:

@@ -11,7 +11,7 @@ from typing import Any
 
 from armtrack_cli.calibrate.board_pose import CalibrateSettings
 from armtrack_cli.core.errors import ConfigError
-from armtrack_cli.core.methods import BUILT, DEFAULT_FOR_KIND, METHODS
+from armtrack_cli.core.methods import BUILT, METHODS, PALM_METHODS
 from armtrack_cli.detect.palm_blobs import PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings
 from armtrack_cli.pipeline.calibrate import calibrate
@@ -44,9 +44,7 @@ def _methods(session: Session, methods, recipe, sets) -> tuple[str, ...]:
             raise ConfigError("--method", f"{unknown[0]!r} is not a method",
                               f"methods are {', '.join(METHODS)}")
         return tuple(methods)
-    if recipe is not None:
-        return (settings_for(recipe, sets)[0].method,)
-    return (DEFAULT_FOR_KIND[session.kind],)
+    return (settings_for(recipe, sets, kind=session.kind)[0].method,)
 
 
 def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe, sets,
@@ -62,8 +60,9 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
              Step("detect", (toml, video), ("detections.csv",),
                   lambda: detect(session.root, out=work.path, recipe=recipe, sets=sets), True)]
     for m in methods:
-        imu = session.imu.file if session.imu is not None else None
-        steps.append(Step(f"fuse {m}", (toml, imu, work / "camera.yaml", work / "detections.csv"),
+        reads = (work / "palm.toml",) if m in PALM_METHODS else (
+            session.imu.file if session.imu is not None else None,)
+        steps.append(Step(f"fuse {m}", (toml, *reads, work / "camera.yaml", work / "detections.csv"),
                           (f"trajectory-{m}.csv", f"kinematics-{m}.csv"),
                           lambda m=m: fuse(session.root, method=m, seed=seed, recipe=recipe,
                                            sets=sets, out=work.path), True))
