@@ -193,12 +193,15 @@ def _camera(path: Path, root: Path, table: Any) -> CameraConfig:
 
 
 def _imu(path: Path, root: Path, table: Any) -> ImuConfig:
-    sec = _Section(path, "imu", table, ("file", "forearm_axis", "rate_hz", "topic"))
+    sec = _Section(path, "imu", table, ("file", "forearm_axis", "rate_hz", "topic", "field"))
     f = sec.string("file", required=True)
     axis = sec.string("forearm_axis", default="+y", choices=AXES)
     rate = sec.number("rate_hz", lo=1.0, hi=10000.0, unit="Hz")
     topic = sec.string("topic")
-    return ImuConfig(root / f, axis, rate, topic)
+    field = sec.string("field")
+    if field is not None and not all(p.isidentifier() for p in field.split(".")):
+        sec.fail("field", f"= {field!r} is not a dotted field path", 'write e.g. "imu" or "data.imu"')
+    return ImuConfig(root / f, axis, rate, topic, field)
 
 
 def _palm(path: Path, table: Any) -> PalmConfig:

@@ -18,7 +18,7 @@ from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStrea
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.images import IMAGE_EXT
-from armtrack_cli.session.imu import read_imu
+from armtrack_cli.session.imu import missing_channels, read_imu
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.video import probe_video
 
@@ -40,6 +40,9 @@ def describe_imu(s: ImuSamples, offset: float | str) -> dict[str, Any]:
         "dropped_samples": s.dropped, "gaps": int(gaps.size),
         "largest_gap_s": round(float(np.diff(s.t).max()), 4) if s.n > 1 else 0.0,
         "orientation": s.orientation_source, "magnetometer": s.mag is not None,
+        "accelerometer": bool(np.isfinite(s.acc).any()),
+        "gyroscope": bool(np.isfinite(s.gyr).any()),
+        "missing_for_fusion": missing_channels(s),
         "empty_channels": empty, "notes": list(s.notes),
     }
 
@@ -92,10 +95,11 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
     have: set[str] = set()
     if session.imu is not None:
         s = read_imu(session.imu.file, rate_hz=session.imu.rate_hz or imu_rate_hz,
-                     topic=session.imu.topic)
+                     topic=session.imu.topic, field=session.imu.field, complete=False)
         out["imu"] = describe_imu(s, session.sync.imu_offset_s)
         out["imu"]["forearm_axis"] = session.imu.forearm_axis
-        have.add("imu")
+        if not out["imu"]["missing_for_fusion"]:
+            have.add("imu")
     cam = session.camera
     if cam is not None and cam.video is not None:
         out["video"] = describe_video(probe_video(cam.video))
@@ -140,15 +144,20 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
         if reach:
             out["groundtruth"]["reach"] = reach
         have.add("groundtruth")
-    out["methods"] = readiness(session, have)
+    lacks = {"imu": "an IMU with " + " and ".join(out["imu"]["missing_for_fusion"])} \
+        if "imu" in out and "imu" not in have else {}
+    out["methods"] = readiness(session, have, lacks)
     return out
 
 
-def readiness(session: Session, have: set[str]) -> dict[str, str]:
-    """For each command/method: 'ready' or what the session still lacks."""
+def readiness(session: Session, have: set[str], lacks: dict[str, str] | None = None
+              ) -> dict[str, str]:
+    """For each command/method: 'ready' or what the session still lacks (``lacks`` words a
+    requirement that is present but incomplete, e.g. an IMU export without accelerometer)."""
     out = {}
+    lacks = lacks or {}
     for name, req in {**NEEDS, "compare": ("groundtruth",)}.items():
-        lack = [r for r in req if r not in have]
+        lack = [lacks.get(r, r) for r in req if r not in have]
         out[name] = "ready" if not lack else "needs " + ", ".join(lack)
         if name in NEEDS and name not in BUILT and not lack:
             out[name] = "data ready; the method is not in this version yet"
@@ -174,6 +183,6 @@ def describe_path(path: Path, *, imu_rate_hz: float | None = None) -> dict[str, 
     elif suffix in VIDEO_EXT:
         out["video"] = describe_video(probe_video(path))
     else:
-        out["imu"] = describe_imu(read_imu(path, rate_hz=imu_rate_hz), 0.0)
+        out["imu"] = describe_imu(read_imu(path, rate_hz=imu_rate_hz, complete=False), 0.0)
         out["imu"]["forearm_axis"] = "+y"
     return out

@@ -66,6 +66,7 @@ class ImuConfig:
     forearm_axis: str
     rate_hz: float | None
     topic: str | None
+    field: str | None = None  # MCAP: dotted path of the sensor_msgs/Imu inside the message
 
     @property
     def forearm_unit(self) -> np.ndarray:
