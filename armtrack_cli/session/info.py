@@ -17,9 +17,11 @@ from armtrack_cli.core.methods import BUILT, NEEDS
 from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStream, time_gaps
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session, load_session
+from armtrack_cli.session.groundtruth import read_markers
 from armtrack_cli.session.images import IMAGE_EXT
 from armtrack_cli.session.imu import missing_channels, read_imu
-from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
+from armtrack_cli.session.point_expr import point_markers
+from armtrack_cli.session.qualisys import select_markers, to_world
 from armtrack_cli.session.video import probe_video
 
 
@@ -57,7 +59,8 @@ def describe_video(v: VideoStream) -> dict[str, Any]:
 def describe_markers(m: MarkerTrajectories, offset: float | str) -> dict[str, Any]:
     missing = np.isnan(m.xyz[..., 0])
     return {
-        "file": m.path, "markers": list(m.names), "rate_hz": m.rate_hz, "frames": int(m.t.size),
+        "file": m.path, ("bodies" if m.rotations is not None else "markers"): list(m.names),
+        "rate_hz": m.rate_hz, "frames": int(m.t.size),
         "duration_s": round(float(m.t[-1] - m.t[0]), 4),
         "span_s": _span(m.t, offset),
         "missing_pct": {n: round(100.0 * float(missing[:, k].mean()), 2)
@@ -136,10 +139,15 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
         out["palm"] = {"markers": list(session.palm.markers), "link_m": list(session.palm.link_m)}
         have.add("palm")
     if session.groundtruth is not None:
-        m = read_qualisys(session.groundtruth.file)
-        cols = select_markers(m, session.groundtruth.markers, session.toml_path)
+        m = read_markers(session.groundtruth.file)
+        cols = select_markers(m, {r: e for r, e in session.groundtruth.markers.items()
+                                  if e in m.names or e not in session.groundtruth.clusters
+                                  and point_markers(e) == (e,)}, session.toml_path)
         out["groundtruth"] = describe_markers(m, session.sync.groundtruth_offset_s)
         out["groundtruth"]["named"] = dict(session.groundtruth.markers)
+        if session.groundtruth.static is not None:
+            out["groundtruth"]["static"] = describe_markers(
+                read_markers(session.groundtruth.static), 0.0)
         reach = check_reach(session, m, cols)
         if reach:
             out["groundtruth"]["reach"] = reach
@@ -178,8 +186,9 @@ def describe_path(path: Path, *, imu_rate_hz: float | None = None) -> dict[str, 
                                        "task": None, "side": "right", "kind": "file",
                                        "recorded": None}, "methods": {}}
     suffix = path.suffix.lower()
-    if suffix == ".tsv":
-        out["groundtruth"] = describe_markers(read_qualisys(path), 0.0)
+    if suffix in (".tsv", ".c3d") or suffix == ".csv" and path.read_bytes()[:32].lstrip(
+            b"\xef\xbb\xbf").lower().startswith(b"trajectories"):
+        out["groundtruth"] = describe_markers(read_markers(path), 0.0)
     elif suffix in VIDEO_EXT:
         out["video"] = describe_video(probe_video(path))
     else:

@@ -1,0 +1,77 @@
+"""The ground truth compare scores against, whatever the lab exported: each joint named in
+[groundtruth] markers (a marker, or mid(…) of several), in W, on the session clock.
+
+A marker the movement trial lacks but [groundtruth] clusters names is an anatomical landmark
+from the static trial, carried by its cluster (compare.joint_centres, CAST).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from armtrack_cli.compare import joint_centres
+from armtrack_cli.compare.score import JOINTS, Truth
+from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.streams import MarkerTrajectories
+from armtrack_cli.session.config import Session
+from armtrack_cli.session.groundtruth import read_markers
+from armtrack_cli.session.point_expr import point_markers
+from armtrack_cli.session.qualisys import to_world
+
+
+def cluster_names(traj: MarkerTrajectories, spec: tuple[str, ...]) -> list[str]:
+    """A cluster's marker names: the list given, or those matching a "PREFIX*" (PREFIX + digits)."""
+    if len(spec) == 1 and spec[0].endswith("*"):
+        pat = re.compile(re.escape(spec[0][:-1]) + r"\d+$")
+        return [n for n in traj.names if pat.match(n)]
+    return list(spec)
+
+
+def _columns(traj: MarkerTrajectories, names: list[str], what: str) -> np.ndarray:
+    missing = [n for n in names if n not in traj.names]
+    if missing:
+        raise GroundTruthError(traj.path, f"has no marker {missing[0]!r} ({what})",
+                               f"its markers are {', '.join(traj.names)}")
+    return np.stack([traj.marker(n) for n in names], axis=1)
+
+
+def marker_track(session: Session, traj: MarkerTrajectories, name: str,
+                 static: MarkerTrajectories | None) -> np.ndarray:
+    """(N, 3) one marker of the trial, or a landmark carried by its cluster (capture frame)."""
+    gt = session.groundtruth
+    if name in traj.names:
+        return traj.marker(name)
+    if name not in gt.clusters:
+        raise GroundTruthError(traj.path, f"has no marker {name!r} ([groundtruth] markers in "
+                               f"{session.toml_path.name})",
+                               f"its markers are {', '.join(traj.names)}; a landmark seen only "
+                               "in the static trial needs [groundtruth] clusters")
+    names = cluster_names(static, gt.clusters[name])
+    if len(names) < 3:
+        raise GroundTruthError(static.path, f"has {len(names)} markers of the cluster carrying "
+                               f"{name!r}: a rigid fit needs at least 3")
+    ref, point = joint_centres.calibrate(_columns(static, names, "cluster, static trial"),
+                                         _columns(static, [name], "landmark")[:, 0])
+    return joint_centres.carry(ref, point, _columns(traj, names, f"cluster carrying {name}"))
+
+
+def joint_points(session: Session, traj: MarkerTrajectories) -> dict[str, np.ndarray]:
+    """role -> (N, 3) m in the capture frame, for every role [groundtruth] markers names."""
+    gt = session.groundtruth
+    static = read_markers(gt.static) if gt.static is not None else None
+    out = {}
+    for role, expr in gt.markers.items():
+        tracks = [marker_track(session, traj, n, static) for n in point_markers(expr)]
+        out[role] = np.mean(tracks, axis=0)  # mid(...): a gap in any marker is a gap
+    return out
+
+
+def read_truth(session: Session) -> Truth:
+    """The [groundtruth] joints in W, on the session clock (session time = stream + offset)."""
+    gt = session.groundtruth
+    traj = read_markers(gt.file)
+    pts = joint_points(session, traj)
+    t = traj.t + session.offset_s("groundtruth_offset_s")
+    return Truth(t, {j: to_world(pts[j], gt.to_world) for j in JOINTS if j in pts}, traj.rate_hz)
