@@ -9,7 +9,17 @@ of the cluster (Arun/Kabsch/Umeyama without scale) carries the landmark along.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
+
+
+def cluster_names(names: tuple[str, ...], spec: tuple[str, ...]) -> list[str]:
+    """A cluster's markers: the list given, or the ``names`` matching "PREFIX*" (PREFIX + digits)."""
+    if len(spec) == 1 and spec[0].endswith("*"):
+        pat = re.compile(re.escape(spec[0][:-1]) + r"\d+$")
+        return [n for n in names if pat.match(n)]
+    return list(spec)
 
 
 def rigid_fit(ref: np.ndarray, cur: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -49,6 +59,14 @@ def carry(ref: np.ndarray, point: np.ndarray, cluster: np.ndarray, *,
             R, t = rigid_fit(ref[k], cluster[i, k])
             out[i] = R @ point + t
     return out
+
+
+def carry_landmark(static, trial, landmark: str, cluster: list[str]) -> np.ndarray:
+    """(N, 3) ``landmark`` of the static trial carried through ``trial`` by ``cluster``
+    (MarkerTrajectories both; the caller has checked the names exist)."""
+    ref, point = calibrate(np.stack([static.marker(n) for n in cluster], axis=1),
+                           static.marker(landmark))
+    return carry(ref, point, np.stack([trial.marker(n) for n in cluster], axis=1))
 
 
 def three_point_angle_deg(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -1,13 +1,12 @@
 """The ground truth compare scores against, whatever the lab exported: each joint named in
 [groundtruth] markers (a marker, or mid(…) of several), in W, on the session clock.
 
-A marker the movement trial lacks but [groundtruth] clusters names is an anatomical landmark
-from the static trial, carried by its cluster (compare.joint_centres, CAST).
+A marker that [groundtruth] clusters names is an anatomical landmark from the static trial,
+carried by its cluster (compare.joint_centres, CAST), whether or not the trial has a column
+for it (Nexus exports the unworn landmarks as empty columns).
 """
 
 from __future__ import annotations
-
-import re
 
 import numpy as np
 
@@ -19,14 +18,6 @@ from armtrack_cli.session.config import Session
 from armtrack_cli.session.groundtruth import read_markers
 from armtrack_cli.session.point_expr import point_markers
 from armtrack_cli.session.qualisys import to_world
-
-
-def cluster_names(traj: MarkerTrajectories, spec: tuple[str, ...]) -> list[str]:
-    """A cluster's marker names: the list given, or those matching a "PREFIX*" (PREFIX + digits)."""
-    if len(spec) == 1 and spec[0].endswith("*"):
-        pat = re.compile(re.escape(spec[0][:-1]) + r"\d+$")
-        return [n for n in traj.names if pat.match(n)]
-    return list(spec)
 
 
 def _columns(traj: MarkerTrajectories, names: list[str], what: str) -> np.ndarray:
@@ -41,14 +32,14 @@ def marker_track(session: Session, traj: MarkerTrajectories, name: str,
                  static: MarkerTrajectories | None) -> np.ndarray:
     """(N, 3) one marker of the trial, or a landmark carried by its cluster (capture frame)."""
     gt = session.groundtruth
-    if name in traj.names:
+    if name in traj.names and name not in gt.clusters:
         return traj.marker(name)
     if name not in gt.clusters:
         raise GroundTruthError(traj.path, f"has no marker {name!r} ([groundtruth] markers in "
                                f"{session.toml_path.name})",
                                f"its markers are {', '.join(traj.names)}; a landmark seen only "
                                "in the static trial needs [groundtruth] clusters")
-    names = cluster_names(static, gt.clusters[name])
+    names = joint_centres.cluster_names(static.names, gt.clusters[name])
     if len(names) < 3:
         raise GroundTruthError(static.path, f"has {len(names)} markers of the cluster carrying "
                                f"{name!r}: a rigid fit needs at least 3")
