@@ -194,3 +194,31 @@ def test_a_malformed_point_is_refused(tmp_path):
                                            'markers = { elbow = "mid(RLEP)" }\n')
     with pytest.raises(ConfigError, match="markers.elbow = 'mid\\(RLEP\\)' is not a marker name"):
         load_session(tmp_path)
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_wrist_angles_from_a_6dof_hand_body(tmp_path, side):
+    """A hand body turned through known wrist angles (the simulator's R_FH) after a neutral
+    first second, exported as QTM 6DOF, read back and decomposed: the same angles."""
+    from armtrack_cli.compare.hand_truth import wrist_angles_deg
+    from armtrack_cli.simulate.hand import default_motion
+
+    motion = default_motion("wrist-rom", 8.0)
+    t = np.arange(0, 8.0, 0.01)
+    q_WH = motion.q_WH(t, side)
+    R_lab = Q.to_matrix(q_WH)  # to_world = identity
+    p = tmp_path / "hand.tsv"
+    p.write_text(format_6dof(["hand"], np.tile([0.4, 0.1, 0.05], (t.size, 1, 1)),
+                             R_lab[:, None], 100.0))
+    R_W = body_rotation_W(read_markers(p), "hand", np.eye(4), p)
+    got = wrist_angles_deg(t, R_W, side)
+    want = np.degrees(motion.angles(t))
+    np.testing.assert_allclose(got, want, atol=0.01)  # Rot[] written with 6 decimals
+    from armtrack_cli.pipeline.groundtruth import read_hand_angles
+
+    (tmp_path / "session.toml").write_text(
+        f'[session]\nside = "{side}"\n[groundtruth]\nfile = "hand.tsv"\n'
+        'markers = { wrist = "hand" }\nhand = "hand"\n[sync]\ngroundtruth_offset_s = 0.5\n')
+    t_s, via_session = read_hand_angles(load_session(tmp_path))
+    np.testing.assert_allclose(t_s, t + 0.5)
+    np.testing.assert_allclose(via_session, got)

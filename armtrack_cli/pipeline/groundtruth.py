@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from armtrack_cli.compare import joint_centres
+from armtrack_cli.compare import hand_truth, joint_centres
 from armtrack_cli.compare.score import JOINTS, Truth
 from armtrack_cli.core.errors import GroundTruthError
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.config import Session
-from armtrack_cli.session.groundtruth import read_markers
+from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.point_expr import point_markers
 from armtrack_cli.session.qualisys import to_world
 
@@ -66,3 +66,16 @@ def read_truth(session: Session) -> Truth:
     pts = joint_points(session, traj)
     t = traj.t + session.offset_s("groundtruth_offset_s")
     return Truth(t, {j: to_world(pts[j], gt.to_world) for j in JOINTS if j in pts}, traj.rate_hz)
+
+
+def read_hand_angles(session: Session) -> tuple[np.ndarray, np.ndarray] | None:
+    """(t on the session clock (M,), wrist angles (M, 3) deg: flexion, deviation, pronation)
+    from the QTM 6DOF body [groundtruth] hand names, or None when it names none. For palm
+    sessions' wrist angles to be scored against (compare.hand_truth)."""
+    gt = session.groundtruth
+    if gt is None or gt.hand is None:
+        return None
+    traj = read_markers(gt.file)
+    R_WH = body_rotation_W(traj, gt.hand, gt.to_world, session.toml_path)
+    t = traj.t + session.offset_s("groundtruth_offset_s")
+    return t, hand_truth.wrist_angles_deg(t, R_WH, session.meta.side)
