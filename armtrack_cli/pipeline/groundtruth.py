@@ -17,7 +17,7 @@ from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.config import Session
 from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.point_expr import point_markers
-from armtrack_cli.session.qualisys import to_world
+from armtrack_cli.session.qualisys import missing_marker, to_world
 
 
 def _columns(traj: MarkerTrajectories, names: list[str], what: str) -> np.ndarray:
@@ -35,10 +35,8 @@ def marker_track(session: Session, traj: MarkerTrajectories, name: str,
     if name in traj.names and name not in gt.clusters:
         return traj.marker(name)
     if name not in gt.clusters:
-        raise GroundTruthError(traj.path, f"has no marker {name!r} ([groundtruth] markers in "
-                               f"{session.toml_path.name})",
-                               f"its markers are {', '.join(traj.names)}; a landmark seen only "
-                               "in the static trial needs [groundtruth] clusters")
+        raise missing_marker(traj, name, f"[groundtruth] markers in {session.toml_path.name}; a "
+                             "landmark seen only in the static trial needs [groundtruth] clusters")
     names = joint_centres.cluster_names(static.names, gt.clusters[name])
     if len(names) < 3:
         raise GroundTruthError(static.path, f"has {len(names)} markers of the cluster carrying "

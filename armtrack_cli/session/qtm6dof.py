@@ -3,8 +3,8 @@
 Header as the 3D export (``KEY<TAB>value``: ``NO_OF_BODIES``, ``BODY_NAMES``, ``FREQUENCY``,
 ``DATA_INCLUDED 6D``), then the table, with or without a ``Frame Time …`` row and
 frame/time columns; per body, in BODY_NAMES order, 16 columns: X Y Z (mm), Roll Pitch Yaw
-(deg), Residual, Rot[0]…Rot[8]. Rot is the body's rotation in the lab frame (body -> lab).
-QTM stores it column by column (Rot[0]=R11, Rot[1]=R21, Rot[2]=R31, …); the order is checked
+(deg), Residual, Rot[0]…Rot[8] (or only the first 6: the rotation then from the angles).
+Rot is the body's rotation in the lab frame (body -> lab). QTM stores it column by column (Rot[0]=R11, Rot[1]=R21, Rot[2]=R31, …); the order is checked
 against the Euler angles under QTM's default definition (R = Rx(roll)·Ry(pitch)·Rz(yaw)),
 and taken row by row instead if only that agrees. Untracked frames (empty, NaN or all-zero
 position) are gaps. Positions in metres after reading.
@@ -22,6 +22,7 @@ from armtrack_cli.session.qualisys import MM, _header
 from armtrack_cli.session.text_table import parse_table, read_text_lines
 
 PER_BODY = 16  # X Y Z Roll Pitch Yaw Residual Rot[0..8]
+EULER_ONLY = 6  # X Y Z Roll Pitch Yaw (an export without the matrix)
 
 
 def is_6dof(keys: dict[str, list[str]]) -> bool:
@@ -83,14 +84,20 @@ def read_qtm_6dof(path: str | Path) -> MarkerTrajectories:
     cols = [h.strip().lower() for h in tab.header]
     time_col = cols.index("time") if "time" in cols else None
     frame_col = cols.index("frame") if "frame" in cols else None
-    first = tab.data.shape[1] - PER_BODY * b
-    if first not in (0, 1, 2):
-        raise GroundTruthError(path, f"has {tab.data.shape[1]} columns, which does not fit {b} "
-                               f"bodies (BODY_NAMES) x {PER_BODY} (X Y Z Roll Pitch Yaw Residual "
-                               "Rot[0..8])", "is BODY_NAMES complete?")
+    per = next((k for k in (PER_BODY, EULER_ONLY) if tab.data.shape[1] - k * b in (0, 1, 2)), None)
+    if per is None:
+        raise GroundTruthError(path, f"is a 6DOF (rigid body) export with {tab.data.shape[1]} "
+                               f"columns, which does not fit {b} bodies (BODY_NAMES) x "
+                               f"{PER_BODY} (X Y Z Roll Pitch Yaw Residual Rot[0..8]) or x "
+                               f"{EULER_ONLY} (X Y Z Roll Pitch Yaw)", "is BODY_NAMES complete?")
+    first = tab.data.shape[1] - per * b
     if not has_row:
         frame_col, time_col = (0 if first >= 1 else None), (1 if first == 2 else None)
-    block = tab.data[:, first:].reshape(-1, b, PER_BODY)
+    block = tab.data[:, first:].reshape(-1, b, per)
+    if per == EULER_ONLY:  # no Rot[] columns: the rotation from the angles, QTM's default
+        rot9 = np.swapaxes(euler_qtm(*np.moveaxis(block[..., 3:6], -1, 0).reshape(3, -1)),
+                           1, 2).reshape(-1, b, 9)
+        block = np.concatenate([block, np.full(block.shape[:2] + (1,), np.nan), rot9], axis=2)
     xyz = block[..., 0:3] * MM
     gap = ~np.isfinite(xyz).all(axis=2) | np.all(block[..., 0:3] == 0, axis=2)
     xyz[gap] = np.nan
