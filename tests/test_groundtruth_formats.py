@@ -222,3 +222,20 @@ def test_wrist_angles_from_a_6dof_hand_body(tmp_path, side):
     t_s, via_session = read_hand_angles(load_session(tmp_path))
     np.testing.assert_allclose(t_s, t + 0.5)
     np.testing.assert_allclose(via_session, got)
+
+
+def test_6dof_named_where_3d_markers_are_expected(tmp_path):
+    """A 6DOF export with Euler angles only, named in session.toml as if it held markers: read
+    (rotation from the angles), and the marker name refused saying it is a 6DOF export."""
+    (tmp_path / "qualisys.tsv").write_text(
+        "NO_OF_FRAMES\t2\nFREQUENCY\t100\nNO_OF_BODIES\t1\nBODY_NAMES\thand\nDATA_INCLUDED\t6D\n"
+        "1\t0.0\t1\t2\t3\t0\t0\t90\n2\t0.01\t1\t2\t3\t0\t0\t90\n")
+    m = read_markers(tmp_path / "qualisys.tsv")
+    np.testing.assert_allclose(m.rotations[0, 0], euler_qtm([0.0], [0.0], [90.0])[0], atol=1e-12)
+    (tmp_path / "session.toml").write_text('[groundtruth]\nfile = "qualisys.tsv"\n'
+                                           'markers = { wrist = "R_WRI" }\n')
+    from armtrack_cli.pipeline.groundtruth import read_truth
+
+    with pytest.raises(GroundTruthError, match=r"is a 6DOF \(rigid body\) export with no body "
+                                               r"'R_WRI'.*its bodies are hand"):
+        read_truth(load_session(tmp_path))

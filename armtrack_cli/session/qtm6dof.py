@@ -4,7 +4,8 @@ Header as the 3D export (``KEY<TAB>value``: ``NO_OF_BODIES``, ``BODY_NAMES``, ``
 ``DATA_INCLUDED 6D``), then the table, with or without a ``Frame Time …`` row and
 frame/time columns; per body, in BODY_NAMES order, 16 columns: X Y Z (mm), Roll Pitch Yaw
 (deg), Residual, Rot[0]…Rot[8] (or only the first 6: the rotation then from the angles).
-Rot is the body's rotation in the lab frame (body -> lab). QTM stores it column by column (Rot[0]=R11, Rot[1]=R21, Rot[2]=R31, …); the order is checked
+Rot is the body's rotation in the lab frame (body -> lab). QTM stores it column by column
+(Rot[0]=R11, Rot[1]=R21, Rot[2]=R31, …); the order is checked
 against the Euler angles under QTM's default definition (R = Rx(roll)·Ry(pitch)·Rz(yaw)),
 and taken row by row instead if only that agrees. Untracked frames (empty, NaN or all-zero
 position) are gaps. Positions in metres after reading.
