@@ -58,6 +58,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 
 validate: $(STAMP)
+	ARMTRACK_FUZZ_EXAMPLES=2000 $(BIN)/python -m pytest -q -p no:cacheprovider tests/test_fuzz_readers.py
 	$(BIN)/python validation/run.py
 
 docs: $(STAMP)

@@ -60,18 +60,27 @@ def test_no_jump_and_no_flip_through_occlusions(sessions):
 
 def test_baselines_rank_as_the_paper_says(sessions):
     """Not detuned, only measured: the constraint beats every baseline by far, and dead
-    reckoning is worse than the camera-aided Gaussian filters (Tao & Hu, Table I). Our plain PF
-    can drift along the camera ray even more than dead reckoning (docs/validation.md)."""
+    reckoning is worse than the camera-aided Gaussian filters (Tao & Hu, Table I). A baseline
+    that drifts out of the arm's reach has those frames left empty (no wrist can be there), so
+    "worse" is: a 5x larger error on the frames it kept, or a tenth of the frames lost."""
     folder, truth = sessions["circle"]
-    rmse = {m: np.sqrt(np.nanmean(np.sum(_err(folder, truth, m)[0] ** 2, axis=1))) for m in METHODS}
-    assert rmse["pf-constraint"] * 5 < min(rmse["ekf"], rmse["ukf"], rmse["pf"])
-    assert rmse["inertial"] > max(rmse["ekf"], rmse["ukf"])
+    rmse, lost = {}, {}
+    for m in METHODS:
+        e, d = _err(folder, truth, m)
+        ok = np.isfinite(e).all(axis=1)
+        rmse[m] = np.sqrt(np.mean(np.sum(e[ok] ** 2, axis=1)))
+        lost[m] = 1 - ok.mean()
+    assert lost["pf-constraint"] == 0.0
+    for m in ("ekf", "ukf", "pf", "inertial"):
+        assert rmse[m] > 5 * rmse["pf-constraint"] or lost[m] > 0.10, (m, rmse[m], lost[m])
+    for m in ("ekf", "ukf"):
+        assert lost["inertial"] > lost[m] + 0.10 or rmse["inertial"] > rmse[m]
 
 
 def test_inertial_drifts_as_physics_says(sessions):
     """Dead reckoning from a start within a few cm: after t seconds the error is bounded by
     ½ t² (‖acc bias‖ + g sin θ_max + its scale), θ the IMU's orientation error (gravity leaking
-    through a tilt), and it does grow: beyond 10 cm by the end."""
+    through a tilt), and it does grow: past the arm's reach, where its frames are left empty."""
     folder, truth = sessions["circle"]
     e, d = _err(folder, truth, "inertial")
     t = d["t"].to_numpy() - d["t"].to_numpy()[0]
@@ -83,8 +92,11 @@ def test_inertial_drifts_as_physics_says(sessions):
     theta = Q.angle_between(imu.quat, truth["imu_q_true"]).max()
     a_err = np.linalg.norm(truth["acc_bias"]) + 9.81 * np.sin(theta)
     bound = 0.05 + 0.5 * a_err * t**2 * 1.5  # 1.5: the orientation error also turns motion
-    assert (err <= bound).all()
-    assert err[-1] > 0.10
+    kept = np.isfinite(err)
+    assert (err[kept] <= bound[kept]).all()
+    assert not kept[-30:].any()  # the last second is beyond reach: missing, not a number
+    meta = (folder / "armtrack" / "trajectory-inertial.meta.json").read_text()
+    assert f'"frames_beyond_reach": {int((~kept).sum())}' in meta
 
 
 def test_missing_data_is_carried_as_missing(sessions):

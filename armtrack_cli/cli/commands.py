@@ -16,6 +16,7 @@ from armtrack_cli import __version__
 from armtrack_cli.cli import text
 from armtrack_cli.cli.batch import cohort_run, each, emit, expand, progress
 from armtrack_cli.core.errors import ArmtrackError
+from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
 
 # Heavy libraries (OpenCV, SciPy, pandas, matplotlib) are imported by the pipeline, which each
@@ -44,6 +45,18 @@ class _Group(click.Group):
             ctx.exit(1)
 
 
+class Finite(click.FloatRange):
+    """A float in a range, with NaN and infinities refused (click's FloatRange lets NaN by)."""
+
+    def convert(self, value, param, ctx):
+        import math
+
+        v = super().convert(value, param, ctx)
+        if not math.isfinite(v):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return v
+
+
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 out_option = click.option("--out", "out_dir", type=click.Path(file_okay=False),
                           help="Work folder: read earlier stages' outputs from it and write this "
@@ -64,7 +77,7 @@ def _parse_pixels(spec: str):
     try:
         pts = [tuple(float(x) for x in p.split(",")) for p in spec.replace(" ", "").split(";") if p]
         arr = np.array(pts, float)
-        if arr.ndim != 2 or arr.shape[1] != 2:
+        if arr.ndim != 2 or arr.shape[1] != 2 or not np.isfinite(arr).all():
             raise ValueError
         return arr
     except ValueError:
@@ -86,7 +99,7 @@ def main() -> None:
 @main.command()
 @click.argument("session", type=click.Path(exists=False))
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
-@click.option("--imu-rate", "imu_rate", type=click.FloatRange(min=1.0, max=10000.0),
+@click.option("--imu-rate", "imu_rate", type=Finite(min=1.0, max=10000.0),
               help="IMU rate in Hz for exports that state none (as [imu] rate_hz does).")
 @out_option
 def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | None) -> None:
@@ -158,7 +171,8 @@ METHOD_CHOICE = click.Choice(list(BUILT))
 @click.argument("sessions", nargs=-1, required=True, type=click.Path())
 @recipe_option
 @click.option("--method", type=METHOD_CHOICE, help="Fusion method (overrides the recipe's).")
-@click.option("--particles", type=click.IntRange(min=10), help="Particles (PF methods).")
+@click.option("--particles", type=click.IntRange(min=10, max=MAX_PARTICLES),
+              help=f"Particles (PF methods), 10 to {MAX_PARTICLES:,}.")
 @click.option("--seed", type=click.IntRange(min=0), help="Random seed (same seed, same bytes).")
 @set_option
 @json_option
@@ -272,25 +286,27 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
               default="circle", show_default=True,
               help="Task: the first four are arm sessions (IMU + patch), wrist-rom and reach-grasp "
               "palm-marker sessions with depth.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Random seed (same seed, "
-              "same bytes).")
-@click.option("--duration", type=click.FloatRange(min=4.0, max=3600.0), default=20.0,
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Random seed (same seed, same bytes).")
+@click.option("--duration", type=Finite(min=4.0, max=3600.0), default=20.0,
               show_default=True, help="Length of the video, s.")
 @click.option("--imu-format", type=click.Choice(["xsens", "csv", "mcap"]), default="xsens",
               show_default=True, help="IMU file written: Xsens MT Manager export, generic CSV, "
               "ROS 2 MCAP.")
 @click.option("--imu-preset", type=click.Choice(["mtw", "consumer", "ideal"]), default="mtw",
               show_default=True, help="IMU error levels: MTw-class, consumer-grade, or none.")
-@click.option("--acc-noise", type=float, help="Override: accelerometer white noise, m/s².")
-@click.option("--acc-bias", type=float, help="Override: accelerometer bias per axis, m/s².")
-@click.option("--gyro-noise", type=float, help="Override: gyro white noise, rad/s.")
-@click.option("--gyro-bias", type=float, help="Override: gyro bias per axis, rad/s.")
-@click.option("--orientation-error", "orientation_rms_deg", type=float,
+@click.option("--acc-noise", type=Finite(0.0, 10.0),
+              help="Override: accelerometer white noise, m/s².")
+@click.option("--acc-bias", type=Finite(0.0, 10.0),
+              help="Override: accelerometer bias per axis, m/s².")
+@click.option("--gyro-noise", type=Finite(0.0, 1.0), help="Override: gyro white noise, rad/s.")
+@click.option("--gyro-bias", type=Finite(0.0, 1.0), help="Override: gyro bias per axis, rad/s.")
+@click.option("--orientation-error", "orientation_rms_deg", type=Finite(0.0, 45.0),
               help="Override: RMS error of the output orientation, degrees.")
-@click.option("--drop-rate", type=click.FloatRange(0.0, 0.5), default=0.0, show_default=True,
+@click.option("--drop-rate", type=Finite(0.0, 0.5), default=0.0, show_default=True,
               help="Fraction of IMU packets dropped, in bursts.")
-@click.option("--fps", type=click.FloatRange(min=1.0, max=240.0), default=30.0, show_default=True)
-@click.option("--imu-rate", type=click.FloatRange(min=20.0, max=1000.0), default=100.0,
+@click.option("--fps", type=Finite(min=1.0, max=240.0), default=30.0, show_default=True)
+@click.option("--imu-rate", type=Finite(min=20.0, max=1000.0), default=100.0,
               show_default=True, help="IMU rate, Hz.")
 @click.option("--qualisys-hz", type=click.Choice(["100", "200"]), default="100", show_default=True)
 @click.option("--gt-gaps", type=click.IntRange(0, 50), default=0, show_default=True,
@@ -316,8 +332,10 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     for spec in occlusions:
         try:
             start, dur = (float(x) for x in spec.split(":"))
+            if not (0 <= start <= 3600 and 0 < dur <= 3600):
+                raise ValueError
         except ValueError:
-            raise click.BadParameter(f"{spec!r} is not START:DURATION",
+            raise click.BadParameter(f"{spec!r} is not START:DURATION (seconds, finite)",
                                      param_hint="--occlusion") from None
         occ.append((start, dur))
     from armtrack_cli import pipeline

@@ -40,3 +40,24 @@ def trajectory_table(t_frames: np.ndarray, frames: np.ndarray, est: Estimates, i
         e[frames] = est.ess
         cols["ess"] = e
     return pd.DataFrame(cols)
+
+
+def impossible_rows(table: pd.DataFrame, *, shoulder: np.ndarray | None, reach_m: float | None,
+                    bound_m: float) -> np.ndarray:
+    """(n,) True where the estimated wrist lies where no wrist can be: farther than
+    ``reach_m`` from the shoulder (arm model), or than ``bound_m`` from W's origin."""
+    w = table[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
+    ok = np.isfinite(w).all(axis=1)
+    far = np.zeros(len(table), bool)
+    if shoulder is not None and reach_m is not None:
+        far[ok] = np.linalg.norm(w[ok] - shoulder, axis=1) > reach_m
+    else:
+        far[ok] = np.linalg.norm(w[ok], axis=1) > bound_m
+    return far
+
+
+def blank(table: pd.DataFrame, rows: np.ndarray) -> pd.DataFrame:
+    """The rows left empty (missing) in every column but t."""
+    out = table.copy()
+    out.loc[rows, [c for c in out.columns if c != "t"]] = np.nan
+    return out

@@ -20,6 +20,7 @@ from armtrack_cli.session.camera_yaml import read_camera_yaml, write_camera_yaml
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.depth import read_depth_frame
 from armtrack_cli.session.images import read_images
+from armtrack_cli.session.outputs import output_set
 from armtrack_cli.session.palm_toml import write_palm_toml
 from armtrack_cli.session.recipe import section
 from armtrack_cli.session.video import probe_video, read_frame
@@ -96,14 +97,17 @@ def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None
     result = {"camera_yaml": str(dest / "camera.yaml"), "frame": frame,
               "reprojection_error_px": round(pose.rms_px, 4), "corners": pose.n_corners,
               "camera_position_m": [round(float(v), 4) for v in pose.camera_position_W], **info}
-    if session.palm is not None:
-        fit, px = _palm(session, cam, image, frame, markers_px)
-        write_palm_toml(dest / "palm.toml", side=session.meta.side, names=fit.names,
-                        link_m=session.palm.link_m, angle_deg=fit.angle_deg,
-                        position_H=fit.position_H, pixels=px,
-                        link_residual_m=fit.link_residual_m, frame=frame,
-                        depth=read_depth_frame(session.root, frame) is not None)
-        result["palm_toml"] = str(dest / "palm.toml")
-        result["palm_link_residual_cm"] = [round(float(v) * 100, 2) for v in fit.link_residual_m]
-    write_camera_yaml(dest / "camera.yaml", cam)
+    palm = _palm(session, cam, image, frame, markers_px) if session.palm is not None else None
+    with output_set():
+        if palm is not None:
+            fit, px = palm
+            write_palm_toml(dest / "palm.toml", side=session.meta.side, names=fit.names,
+                            link_m=session.palm.link_m, angle_deg=fit.angle_deg,
+                            position_H=fit.position_H, pixels=px,
+                            link_residual_m=fit.link_residual_m, frame=frame,
+                            depth=read_depth_frame(session.root, frame) is not None)
+            result["palm_toml"] = str(dest / "palm.toml")
+            result["palm_link_residual_cm"] = [round(float(v) * 100, 2)
+                                               for v in fit.link_residual_m]
+        write_camera_yaml(dest / "camera.yaml", cam)
     return result

@@ -14,7 +14,7 @@ from armtrack_cli.core.methods import METHODS
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.session.config import load_session, require
-from armtrack_cli.session.outputs import write_table
+from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.tables import read_kinematics, read_trajectory
 from armtrack_cli.session.workfolder import WorkFolder
 
@@ -45,10 +45,11 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
         rows += s.rows
         mrows += s.measure_rows
         excluded.update(s.excluded)
-    write_table(work / "errors.csv", pd.DataFrame(rows, columns=list(COLUMNS)), command="compare",
-                settings={"methods": list(methods), "excluded_frames": excluded})
-    write_table(work / "measures.csv", pd.DataFrame(mrows), command="compare",
-                settings={"methods": list(methods)})
+    with output_set():
+        write_table(work / "errors.csv", pd.DataFrame(rows, columns=list(COLUMNS)),
+                    command="compare", settings={"methods": list(methods), "excluded_frames": excluded})
+        write_table(work / "measures.csv", pd.DataFrame(mrows), command="compare",
+                    settings={"methods": list(methods)})
     text = table_one(rows, "wrist") + ("\n\n" + table_one(rows, "elbow")
                                        if any(r["joint"] == "elbow" for r in rows) else "")
     return {"errors": str(work / "errors.csv"), "measures": str(work / "measures.csv"),

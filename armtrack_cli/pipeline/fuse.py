@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -13,18 +14,20 @@ import pandas as pd
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
+from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
 from armtrack_cli.core.measures import kinematics_rows
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
-from armtrack_cli.fuse.trajectory import trajectory_table
+from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
-from armtrack_cli.session.outputs import write_table
+from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.recipe import section
 from armtrack_cli.session.tables import read_patch_detections
+from armtrack_cli.session.video import probe_video
 
 
 def settings_for(recipe: str | None, sets: tuple[str, ...], *, method: str | None = None,
@@ -32,8 +35,6 @@ def settings_for(recipe: str | None, sets: tuple[str, ...], *, method: str | Non
                  ) -> tuple[FuseSettings, str]:
     """[fuse] from defaults < recipe < --set < explicit flags, checked; and where it came from."""
     doc, where = resolve_recipe(recipe, sets)
-    if sets:
-        where = "--set" if where == "defaults" else f"{where} with --set"
     s = with_flags(section(doc, "fuse", FuseSettings, where), method=method,
                    particles=particles, seed=seed)
     return checked(s, where), where
@@ -54,7 +55,12 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     require(session, "imu")
     require(session, "camera")
     cam = read_calibrated_camera(dest / "camera.yaml")
-    t_f, uv = read_patch_detections(dest / "detections.csv")
+    video = probe_video(session.camera.video)
+    if (video.width, video.height) != (cam.width, cam.height):
+        raise DataError(dest / "camera.yaml", f"is for {cam.width}x{cam.height} images but the "
+                        f"video is {video.width}x{video.height}", "rerun `armtrack calibrate`")
+    t_f, uv = read_patch_detections(dest / "detections.csv", width=cam.width, height=cam.height,
+                                    n_frames=video.n_frames)
     imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
                    field=session.imu.field)
     ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
@@ -90,6 +96,13 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     dest = out_dir(session, out)
     p = prepare(session, dest, s)
     inp = p.inputs
+    if p.arm is not None:
+        miss = models.ray_misses_arm(p.projection, inp.z[0], p.arm, inp.q_WB[0])
+        if miss > REACH_MARGIN_M:
+            raise ConfigError(session.toml_path, f"[arm] cannot explain the first detection: its "
+                              f"camera ray passes {miss * 100:.0f} cm outside the arm's reach "
+                              f"from shoulder_m = {session.arm.shoulder_m.tolist()}",
+                              "check shoulder_m (in W, metres) and the arm lengths")
     x0 = np.zeros(6)
     x0[:3], how = models.initial_wrist(p.projection, inp.z[0], arm=p.arm, q_WB=inp.q_WB[0],
                                        plane_height_m=s.init_plane_m)
@@ -99,15 +112,33 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     elapsed = time.perf_counter() - start
     table = trajectory_table(p.t_frames, p.frames, est, inp, p.arm)
     name = f"trajectory-{s.method}.csv"
-    settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how}
-    write_table(dest / name, table, command="fuse", settings=settings)
+    if not np.isfinite(est.mean).all():
+        k = int(np.flatnonzero(~np.isfinite(est.mean).all(axis=1))[0])
+        raise DataError(dest / name, f"{s.method} diverged: its estimate is not finite from "
+                        f"t = {p.t_frames[p.frames[k]]:.3f} s; nothing was written",
+                        "check the detections and the IMU, or try another method")
+    far = impossible_rows(table, shoulder=p.arm.shoulder if p.arm else None,
+                          reach_m=p.arm.L1 + p.arm.L2 + REACH_MARGIN_M if p.arm else None,
+                          bound_m=MAX_OBJECT_RANGE_M)
+    if far.all() or not np.isfinite(table["wrist_x"].to_numpy()[~far]).any():
+        raise DataError(dest / name, f"{s.method} left the arm's reach in every frame; nothing "
+                        "was written", "check [arm], [sync] and the detections")
+    if far.any():
+        table = blank(table, far)
+        warnings.warn(f"{dest / name}: {far.sum()} of {len(far)} frames put the wrist where no "
+                      f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
+    settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
+                "frames_beyond_reach": int(far.sum())}
     elbow = table[["elbow_x", "elbow_y", "elbow_z"]].to_numpy() if p.arm is not None else None
     kin = kinematics_rows(table["t"].to_numpy(), table[["wrist_x", "wrist_y", "wrist_z"]].to_numpy(),
                           elbow=elbow, shoulder=p.arm.shoulder if p.arm is not None else None)
-    write_table(dest / f"kinematics-{s.method}.csv", pd.DataFrame(kin), command="fuse",
-                settings=settings)
+    with output_set():
+        write_table(dest / name, table, command="fuse", settings=settings)
+        write_table(dest / f"kinematics-{s.method}.csv", pd.DataFrame(kin), command="fuse",
+                    settings=settings)
     n = int(p.frames.size)
     return {"method": s.method, "trajectory": str(dest / name), "frames": n,
             "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),
             "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
-            "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how}
+            "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how,
+            "frames_beyond_reach": int(far.sum())}

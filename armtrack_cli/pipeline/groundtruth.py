@@ -54,6 +54,10 @@ def joint_points(session: Session, traj: MarkerTrajectories) -> dict[str, np.nda
     for role, expr in gt.markers.items():
         tracks = [marker_track(session, traj, n, static) for n in point_markers(expr)]
         out[role] = np.mean(tracks, axis=0)  # mid(...): a gap in any marker is a gap
+        if not np.isfinite(out[role]).all(axis=1).any():
+            raise GroundTruthError(traj.path, f"marker {expr!r} ({role}) is never seen: every "
+                                   "frame is a gap", "check the marker labels in the capture "
+                                   "software (and [groundtruth] clusters for landmarks)")
     return out
 
 

@@ -9,16 +9,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from armtrack_cli.calibrate.board_pose import CalibrateSettings
 from armtrack_cli.core.errors import ConfigError
 from armtrack_cli.core.methods import BUILT, DEFAULT_FOR_KIND, METHODS
+from armtrack_cli.detect.palm_blobs import PalmBlobSettings
+from armtrack_cli.detect.patch_tracker import PatchSettings
 from armtrack_cli.pipeline.calibrate import calibrate
-from armtrack_cli.pipeline.common import out_dir
+from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.compare import compare
 from armtrack_cli.pipeline.detect import detect
 from armtrack_cli.pipeline.fuse import fuse, settings_for
 from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.depth import depth_path
-from armtrack_cli.session.recipe import recipe_file
+from armtrack_cli.session.recipe import recipe_file, section
 from armtrack_cli.session.workfolder import WorkFolder, newest
 
 STAGES = ("calibrate", "detect", "fuse", "compare", "report")
@@ -72,6 +75,16 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
                                                     s.settings) for s in steps]
 
 
+def check_settings(recipe: str | None, sets: tuple[str, ...]) -> None:
+    """Every stage's settings from the recipe and --set, checked before any stage runs, so a
+    bad value stops the run before it has rewritten anything."""
+    doc, where = resolve_recipe(recipe, sets)
+    for name, cls in (("calibrate", CalibrateSettings), ("detect.patch", PatchSettings),
+                      ("detect.palm", PalmBlobSettings)):
+        section(doc, name, cls, where)
+    settings_for(recipe, sets)
+
+
 def _stale(step: Step, work: WorkFolder, *, force: bool, sets) -> bool:
     if force or (step.settings and sets) or any(p is None for p in step.inputs):
         return True
@@ -86,6 +99,7 @@ def run(session: str | Path, *, through: str = "report", methods: tuple[str, ...
     if through not in STAGES:
         raise ConfigError("--through", f"{through!r} is not a stage", f"stages are {', '.join(STAGES)}")
     s = load_session(session)
+    check_settings(recipe, sets)
     work = WorkFolder(out_dir(s, out))
     chosen = _methods(s, methods, recipe, sets)
     last = STAGES.index(through)

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 
 from armtrack_cli.core.errors import ConfigError, did_you_mean
+from armtrack_cli.core.limits import MAX_BOARD_SQUARES
+from armtrack_cli.session.files import read_small_text
 from armtrack_cli.session.point_expr import point_markers
 from armtrack_cli.session.session_types import (  # noqa: F401  (re-exported for the stages)
     ArmConfig,
@@ -173,6 +175,9 @@ def _board(sec: _Section) -> BoardConfig | None:
     squares = b.vector("squares", 2, required=True, integer=True)
     if min(squares) < 2:
         b.fail("squares", f"= {squares}: a board needs at least 2 x 2 squares")
+    if squares[0] * squares[1] > MAX_BOARD_SQUARES:
+        b.fail("squares", f"= {squares}: more than {MAX_BOARD_SQUARES:,} squares is not a "
+               "printed board", "count the squares along each side, e.g. [7, 5]")
     square = b.number("square_m", required=True, lo=1e-3, hi=1.0, unit="m",
                       hint="board sizes are in metres (0.04, not 40)")
     marker = b.number("marker_m", required=True, lo=1e-3, hi=1.0, unit="m",
@@ -312,17 +317,12 @@ def load_session(folder: str | Path) -> Session:
     if not root.is_dir():
         raise ConfigError(root, "is not a session folder",
                           "give the folder that holds session.toml")
-    if not path.is_file():
-        raise ConfigError(path, "not found", "a session folder needs a session.toml "
-                          "(see docs/recording-guide.md)")
-    raw = path.read_bytes()
-    if not raw.strip():
+    text = read_small_text(path, ConfigError, "a session.toml", hint="a session folder needs a "
+                           "session.toml (see docs/recording-guide.md)")
+    if not text.strip():
         raise ConfigError(path, "is empty", "it needs at least [camera]/[imu] or [palm] sections")
     try:
-        text = raw.decode("utf-8")
         doc = tomllib.loads(text)
-    except UnicodeDecodeError:
-        raise ConfigError(path, "is not a text file (not UTF-8)") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(path, f"is not valid TOML: {exc}") from None
     for name in doc:

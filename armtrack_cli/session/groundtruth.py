@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.limits import MAX_SESSION_S
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session import c3d, qtm6dof, qualisys, vicon
 from armtrack_cli.session.text_table import read_text_lines
@@ -28,14 +29,29 @@ def read_markers(path: str | Path) -> MarkerTrajectories:
     if not path.exists():
         raise GroundTruthError(path, "not found", "check [groundtruth] file in session.toml")
     if path.is_file() and c3d.is_c3d(path):
-        return c3d.read_c3d(path)
+        return _plausible(c3d.read_c3d(path))
     lines = read_text_lines(path, GroundTruthError, f"a ground-truth file ({FORMATS})")
     if vicon.looks_like_vicon(lines):
-        return vicon.read_vicon_csv(path, lines=lines)
+        return _plausible(vicon.read_vicon_csv(path, lines=lines))
     keys, _ = qualisys._header(path, lines)
     if qtm6dof.is_6dof(keys):
-        return qtm6dof.read_qtm_6dof(path)
-    return qualisys.read_qualisys(path)
+        return _plausible(qtm6dof.read_qtm_6dof(path))
+    return qualisys.read_qualisys(path)  # checks the same bounds itself
+
+
+def _plausible(m: MarkerTrajectories) -> MarkerTrajectories:
+    """The bounds the QTM 3D reader applies: no coordinate beyond any capture volume, no clock
+    longer than any session."""
+    far = np.isinf(m.xyz) | (np.abs(np.nan_to_num(m.xyz)) > qualisys.MAX_MARKER_MM * qualisys.MM)
+    if far.any():
+        i, k, a = np.argwhere(far)[0]
+        raise GroundTruthError(m.path, f"frame {i + 1}: marker {m.names[k]!r} {'XYZ'[a]} = "
+                               f"{m.xyz[i, k, a]:g} m, beyond any capture volume",
+                               "the file is damaged or its units are wrong")
+    if m.t.size and m.t[-1] - m.t[0] > MAX_SESSION_S:
+        raise GroundTruthError(m.path, f"its clock spans {(m.t[-1] - m.t[0]) / 3600:.0f} h, "
+                               "longer than any session", "its frame or rate field is damaged")
+    return m
 
 
 def body_rotation_W(traj: MarkerTrajectories, body: str, to_world: np.ndarray,

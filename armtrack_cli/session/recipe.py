@@ -13,13 +13,16 @@ beside every output.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import sys
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from armtrack_cli.core import limits
 from armtrack_cli.core.errors import ConfigError, did_you_mean
+from armtrack_cli.session.files import read_small_text
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -47,8 +50,8 @@ def recipe_file(recipe: str | None) -> Path | None:
     """The file a recipe name or path resolves to (None for none, or one not found)."""
     if recipe is None:
         return None
-    if Path(recipe).is_file():
-        return Path(recipe)
+    if Path(recipe).exists() or Path(recipe).is_symlink():
+        return Path(recipe)  # a path: read_small_text says what is wrong with it
     return next((d / f"{recipe}.toml" for d in recipe_dirs() if (d / f"{recipe}.toml").is_file()),
                 None)
 
@@ -62,7 +65,7 @@ def load_recipe(recipe: str | None) -> tuple[dict[str, Any], str]:
         raise ConfigError(recipe, "is neither a recipe file nor a recipe name",
                           did_you_mean(recipe, recipe_names(), what="recipes"))
     try:
-        return tomllib.loads(path.read_text()), str(path)
+        return tomllib.loads(read_small_text(path, ConfigError, "a recipe (TOML)")), str(path)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(path, f"is not valid TOML: {exc}") from None
 
@@ -104,14 +107,28 @@ def section(doc: dict[str, Any], path: str, cls: type, where: str):
     for k, v in node.items():
         default = getattr(cls(), k)
         if isinstance(default, (int, float)) and not isinstance(default, bool):
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ConfigError(where, f"[{path}] {k} = {v!r} is not a number")
-            v = type(default)(v) if not (isinstance(default, int) and not float(v).is_integer()) \
-                else v
+            v = _number(v, default, f"{path}.{k}", where)
         elif isinstance(default, str) and not isinstance(v, str):
             raise ConfigError(where, f"[{path}] {k} = {v!r} is not a string")
         kwargs[k] = v
     return cls(**kwargs)
+
+
+def _number(v: Any, default: int | float, key: str, where: str) -> int | float:
+    """A numeric setting: a finite number of the default's kind, inside limits.SETTINGS."""
+    section_name, name = key.rsplit(".", 1)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise ConfigError(where, f"[{section_name}] {name} = {v!r} is not a finite number")
+    if isinstance(default, int):
+        if not float(v).is_integer():
+            raise ConfigError(where, f"[{section_name}] {name} = {v!r} is not a whole number")
+        v = int(v)
+    else:
+        v = float(v)
+    lo, hi = limits.SETTINGS.get(key, (-math.inf, math.inf))
+    if not lo <= v <= hi:
+        raise ConfigError(where, f"[{section_name}] {name} = {v!r} is outside {lo:g} … {hi:g}")
+    return v
 
 
 def known_sections(doc: dict[str, Any], sections: tuple[str, ...], where: str) -> None:

@@ -11,7 +11,6 @@ import numpy as np
 
 B_TO_W = np.diag([1.0, -1.0, -1.0])  # X_b = B_TO_W X_W (its own inverse)
 MIN_CORNERS = 6  # corners for a board pose (calibrate) and for a view used in intrinsics
-MAX_SQUARES = 10_000  # squares on a board (a typo of 100000 must not build a board for hours)
 
 
 def make_board(squares, square_m: float, marker_m: float, dictionary: str):
