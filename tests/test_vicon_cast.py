@@ -104,3 +104,13 @@ def test_ue_adl_elbow_rom_beside_the_authors(trial, three_point, isb, isb_upper)
     # ISB frames from the clusters: within 5 deg on the drinking and combing trials
     if trial in ("DR1", "CR1"):
         assert abs(r["isb_rom_deg"] - p) < 5.0
+
+
+def test_info_describes_a_lone_vicon_csv(tmp_path):
+    from .conftest import run_cli
+
+    xyz = np.random.default_rng(1).uniform(-900, 900, (10, 2, 3))
+    (tmp_path / "trial.csv").write_bytes(_vicon_csv(["RLEP", "RMEP"], xyz))
+    r = run_cli("info", tmp_path / "trial.csv", "--json")
+    assert r.exit_code == 0, r.stderr
+    assert '"markers": [\n      "RLEP",\n      "RMEP"\n    ]' in r.stdout

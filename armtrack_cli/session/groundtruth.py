@@ -15,9 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import GroundTruthError
-from armtrack_cli.core.limits import MAX_SESSION_S
+from armtrack_cli.core.limits import MAX_SESSION_S, MAX_TEXT_BYTES
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session import c3d, qtm6dof, qualisys, vicon
+from armtrack_cli.session.files import regular_file
 from armtrack_cli.session.text_table import read_text_lines
 
 FORMATS = "QTM 3D or 6DOF TSV, C3D, or Vicon Nexus trajectories CSV"
@@ -25,10 +26,9 @@ FORMATS = "QTM 3D or 6DOF TSV, C3D, or Vicon Nexus trajectories CSV"
 
 def read_markers(path: str | Path) -> MarkerTrajectories:
     """The ground-truth file's markers (or rigid bodies), whatever its format."""
-    path = Path(path)
-    if not path.exists():
-        raise GroundTruthError(path, "not found", "check [groundtruth] file in session.toml")
-    if path.is_file() and c3d.is_c3d(path):
+    path = regular_file(path, GroundTruthError, f"a ground-truth file ({FORMATS})",
+                        hint="check [groundtruth] file in session.toml", max_bytes=MAX_TEXT_BYTES)
+    if c3d.is_c3d(path):
         return _plausible(c3d.read_c3d(path))
     lines = read_text_lines(path, GroundTruthError, f"a ground-truth file ({FORMATS})")
     if vicon.looks_like_vicon(lines):

@@ -172,6 +172,12 @@ def readiness(session: Session, have: set[str], lacks: dict[str, str] | None = N
     return out
 
 
+def _head(path: Path, n: int = 32) -> bytes:
+    """The first bytes of a file (a Vicon CSV starts with 'Trajectories')."""
+    with open(path, "rb") as f:
+        return f.read(n)
+
+
 VIDEO_EXT = (".mp4", ".avi", ".mkv", ".mov", ".m4v")
 
 
@@ -186,7 +192,7 @@ def describe_path(path: Path, *, imu_rate_hz: float | None = None) -> dict[str, 
                                        "task": None, "side": "right", "kind": "file",
                                        "recorded": None}, "methods": {}}
     suffix = path.suffix.lower()
-    if suffix in (".tsv", ".c3d") or suffix == ".csv" and path.read_bytes()[:32].lstrip(
+    if suffix in (".tsv", ".c3d") or suffix == ".csv" and _head(path).lstrip(
             b"\xef\xbb\xbf").lower().startswith(b"trajectories"):
         out["groundtruth"] = describe_markers(read_markers(path), 0.0)
     elif suffix in VIDEO_EXT:
