@@ -114,6 +114,8 @@ def cohort_run(folders, sessions, out_dir, as_json: bool, run_many, options: dic
                 click.echo(f"error: {r['error']}", err=True)
             elif not as_json:
                 click.echo(f"{r['session']}: {r['status']} ({r.get('stages_run', 0)} stages ran)")
+            for w in filter(None, (r.get("warnings") or "").split(" | ")):
+                click.echo(f"warning: {w}", err=True)
             bar(bar.done + 1)
         rows = run_many(folders, outs, workers=workers, scheduler=scheduler, on_done=done,
                         **options)

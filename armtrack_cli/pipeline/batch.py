@@ -10,6 +10,7 @@ task, method, data-quality figures and every clinical measure of kinematics-METH
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -26,7 +27,8 @@ from armtrack_cli.session.tables import read_csv_table, read_kinematics
 from armtrack_cli.session.workfolder import WorkFolder
 
 COHORT_FIRST = ("session", "status", "subject", "recorded", "task", "side", "method", "stages_run",
-                "frames", "detected_pct", "duration_s", "wrist_rmse_cm", "elbow_rmse_cm", "error")
+                "frames", "detected_pct", "duration_s", "wrist_rmse_cm", "elbow_rmse_cm", "error",
+                "warnings")
 
 
 def _quality(work: WorkFolder, method: str) -> dict[str, Any]:
@@ -53,10 +55,14 @@ def _quality(work: WorkFolder, method: str) -> dict[str, Any]:
 def run_one(folder: str, out: str | None, options: dict[str, Any]) -> list[dict[str, Any]]:
     """One session's task: every stage, then its cohort rows (one per method). Never raises
     for bad data: the error becomes the row's ``error``."""
-    base: dict[str, Any] = {"session": str(folder), "status": "done", "error": ""}
+    base: dict[str, Any] = {"session": str(folder), "status": "done", "error": "",
+                            "warnings": ""}
     try:
-        r = run(folder, out=out, **options)
+        with warnings.catch_warnings(record=True) as caught:  # a worker's warnings come back
+            warnings.simplefilter("always")                    # in its row, one line each
+            r = run(folder, out=out, **options)
         s = load_session(folder)
+        base["warnings"] = " | ".join(" ".join(str(w.message).split()) for w in caught)
     except ArmtrackError as exc:
         return [{**base, "status": "failed", "error": str(exc)}]
     except Exception as exc:  # a bug of ours must not stop the night's run either
@@ -128,6 +134,8 @@ def write_cohort(path: str | Path, rows: list[dict[str, Any]]) -> Path:
     df = pd.DataFrame(rows)
     rest = sorted(c for c in df.columns if c not in COHORT_FIRST)
     df = df.reindex(columns=[c for c in COHORT_FIRST] + rest)
+    for c in ("stages_run", "frames"):  # counts stay integers beside a failed (empty) row
+        df[c] = pd.to_numeric(df[c]).round().astype("Int64")
     return write_table(path, df, command="run", settings={"sessions": len(rows)})
 
 
