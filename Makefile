@@ -24,7 +24,11 @@ demo: $(STAMP)
 	$(BIN)/armtrack run $(DEMO) --method ekf --method pf-constraint --out $(DEMO_OUT)/circle-01
 	$(BIN)/armtrack info sample_sessions/wrist-rom-01
 	$(BIN)/armtrack run sample_sessions/reach-01 sample_sessions/wrist-rom-01 --out $(DEMO_OUT)
-	@echo "demo: outputs in $(DEMO_OUT)/"
+	$(BIN)/armtrack simulate $(DEMO_OUT)/sessions/circle-02 --seed 5 --recorded 2026-11-27T10:15:00 --force
+	$(BIN)/armtrack run $(DEMO_OUT)/sessions/circle-02 --out $(DEMO_OUT)/circle-02
+	$(BIN)/armtrack report $(DEMO) $(DEMO_OUT)/sessions/circle-02 --out $(DEMO_OUT) \
+		-o $(DEMO_OUT)/progress-SIM.pdf
+	@echo "demo: outputs and reports (report.pdf in each folder, progress-SIM.pdf) in $(DEMO_OUT)/"
 
 samples: $(STAMP)
 	$(BIN)/armtrack simulate sample_sessions/circle-01 --seed 1 --gt-gaps 2 --force

@@ -14,7 +14,7 @@ import click
 
 from armtrack_cli import __version__
 from armtrack_cli.cli import text
-from armtrack_cli.cli.batch import cohort_run, each, emit, expand, progress
+from armtrack_cli.cli.batch import cohort_run, each, emit, expand, out_for, progress
 from armtrack_cli.core.errors import ArmtrackError
 from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
@@ -215,6 +215,23 @@ def compare(sessions, methods, as_json, out_dir) -> None:
 
 @main.command()
 @click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="The PDF to write "
+              "(default: report.pdf in the work folder of the latest session).")
+@json_option
+@out_option
+def report(sessions, output, as_json, out_dir) -> None:
+    """The clinician PDF (A4): page 1 in plain words, trajectories, accuracy against the
+    reference, wrist angles; several sessions of one subject make one report with their
+    progress."""
+    from armtrack_cli import pipeline
+
+    folders = expand(sessions)
+    r = pipeline.report([(f, out_for(out_dir, f, sessions)) for f in folders], output=output)
+    emit(r, as_json, [f"{', '.join(r['sessions'])} -> {r['report']}"])
+
+
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
 @click.option("--through", type=click.Choice(["calibrate", "detect", "fuse", "compare", "report"]),
               default="report", show_default=True, help="The last stage to run.")
 @click.option("--method", "methods", type=click.Choice(list(METHODS)), multiple=True,
@@ -317,6 +334,8 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 @click.option("--no-distortion", is_flag=True, help="An ideal pinhole lens.")
 @click.option("--calib-images", type=click.IntRange(0, 60), default=0, show_default=True,
               help="Also film the board from N angles into calib/ (intrinsics = \"calib/\").")
+@click.option("--recorded", type=click.DateTime(["%Y-%m-%dT%H:%M:%S", "%Y-%m-%d"]),
+              help="When the session was recorded (arm tasks), e.g. 2026-11-27T10:15:00.")
 @click.option("--undeclared-imu-offset", is_flag=True,
               help="Write imu_offset_s = \"auto\" (the truth file keeps the real offset).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
@@ -324,7 +343,8 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
-             distractor, occlusions, no_distortion, calib_images, undeclared_imu_offset, force,
+             distractor, occlusions, no_distortion, calib_images, recorded, undeclared_imu_offset,
+             force,
              as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
@@ -352,7 +372,8 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
             imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
             drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
             distractor=distractor, occlusions=tuple(occ), distortion=not no_distortion,
-            declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images)
+            declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images,
+            **({"recorded": recorded.strftime("%Y-%m-%dT%H:%M:%S")} if recorded else {}))
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
     n_frames = int(round(duration * fps))
     with progress(n_frames, "rendering", quiet=as_json) as bar:

@@ -15,7 +15,7 @@ MAX_PIXEL_MARGIN = 0.5  # detections may lie outside the image by this share of 
 MAX_SESSION_S = 24 * 3600.0  # a stream longer than a day is a broken clock, not a session
 
 SETTINGS = {  # recipe section.key -> (low, high)
-    "calibrate.max_error_px": (0.01, 50.0),
+    "calibrate.max_error_px": (1e-4, 50.0),
     "detect.patch.min_area_px": (1, 1e6),
     "detect.patch.max_jump_px": (1.0, 1e4),
     "detect.patch.lost_fraction": (0.0, 1.0),

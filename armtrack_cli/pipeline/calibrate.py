@@ -88,7 +88,7 @@ def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None
     if pose.n_corners < MIN_CORNERS:
         raise CalibrationError(video.path, f"frame {frame}: only {pose.n_corners} board corners "
                                f"found, {MIN_CORNERS} needed", "try another --frame")
-    if pose.rms_px > settings.max_error_px:
+    if not pose.rms_px <= settings.max_error_px:  # NaN too
         raise CalibrationError(video.path, f"frame {frame}: board reprojection error "
                                f"{pose.rms_px:.2f} px is above {settings.max_error_px} px",
                                "check the intrinsics and the board sizes, or try another --frame")

@@ -8,11 +8,12 @@ from typing import Any
 import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
-from armtrack_cli.compare.score import JOINTS, score
+from armtrack_cli.compare.score import JOINTS, score, truth_markers
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.methods import METHODS
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
+from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
 from armtrack_cli.session.config import load_session, require
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.tables import read_kinematics, read_trajectory
@@ -28,7 +29,6 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
     truth = read_truth(session)
-    shoulder = session.arm.shoulder_m if session.arm is not None else None
     rows, mrows, excluded = [], [], {}
     for m in methods:
         traj = read_trajectory(work / f"trajectory-{m}.csv")
@@ -40,10 +40,11 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
                             "check [sync] groundtruth_offset_s")
         est = {j: traj[[f"{j}_x", f"{j}_y", f"{j}_z"]].to_numpy() for j in JOINTS
                if f"{j}_x" in traj}
-        s = score(m, t, est, truth, est_measures=read_kinematics(work / f"kinematics-{m}.csv"),
-                  shoulder=shoulder)
+        s = score(m, t, est, truth)
         rows += s.rows
-        mrows += s.measure_rows
+        mrows += measure_comparison(m, read_kinematics(work / f"kinematics-{m}.csv"),
+                                    truth_inputs(trajectory_inputs(traj, session), session,
+                                                 truth_markers(t, truth)))
         excluded.update(s.excluded)
     with output_set():
         write_table(work / "errors.csv", pd.DataFrame(rows, columns=list(COLUMNS)),

@@ -10,17 +10,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
-from armtrack_cli.core.measures import kinematics_rows
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.kinematics import kinematics_table
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
@@ -129,13 +128,12 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
                       f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
                 "frames_beyond_reach": int(far.sum())}
-    elbow = table[["elbow_x", "elbow_y", "elbow_z"]].to_numpy() if p.arm is not None else None
-    kin = kinematics_rows(table["t"].to_numpy(), table[["wrist_x", "wrist_y", "wrist_z"]].to_numpy(),
-                          elbow=elbow, shoulder=p.arm.shoulder if p.arm is not None else None)
+    q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
+    q_WB[p.frames] = inp.q_WB
+    kin = kinematics_table(table, session, q_WB=q_WB)
     with output_set():
         write_table(dest / name, table, command="fuse", settings=settings)
-        write_table(dest / f"kinematics-{s.method}.csv", pd.DataFrame(kin), command="fuse",
-                    settings=settings)
+        write_table(dest / f"kinematics-{s.method}.csv", kin, command="fuse", settings=settings)
     n = int(p.frames.size)
     return {"method": s.method, "trajectory": str(dest / name), "frames": n,
             "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),

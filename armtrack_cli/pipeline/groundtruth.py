@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from armtrack_cli.compare import hand_truth, joint_centres
-from armtrack_cli.compare.score import JOINTS, Truth
+from armtrack_cli.compare.score import Truth
 from armtrack_cli.core.errors import GroundTruthError
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.config import Session
@@ -67,7 +67,8 @@ def read_truth(session: Session) -> Truth:
     traj = read_markers(gt.file)
     pts = joint_points(session, traj)
     t = traj.t + session.offset_s("groundtruth_offset_s")
-    return Truth(t, {j: to_world(pts[j], gt.to_world) for j in JOINTS if j in pts}, traj.rate_hz)
+    return Truth(t, {j: to_world(p, gt.to_world) for j, p in pts.items()},
+                 traj.rate_hz)  # every named point: joints, or a palm session's markers
 
 
 def read_hand_angles(session: Session) -> tuple[np.ndarray, np.ndarray] | None:

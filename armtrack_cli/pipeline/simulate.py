@@ -53,6 +53,8 @@ def simulate_command(name: str, settings: ArmSimSettings, imu_format: str) -> st
         parts.append(f"--imu-format {imu_format}")
     if settings.calib_images:
         parts.append(f"--calib-images {settings.calib_images}")
+    if settings.recorded != default.recorded:
+        parts.append(f"--recorded {settings.recorded}")
     if settings.qualisys_hz != default.qualisys_hz:
         parts.append(f"--qualisys-hz {settings.qualisys_hz:g}")
     for k, v in sorted(settings.imu_errors.items()):

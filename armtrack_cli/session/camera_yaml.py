@@ -14,6 +14,7 @@ import numpy as np
 from armtrack_cli.core.errors import VideoError
 from armtrack_cli.core.limits import MAX_SMALL_BYTES
 from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.session import opencv_yaml
 from armtrack_cli.session.files import regular_file
 from armtrack_cli.session.outputs import atomic_write
 
@@ -28,27 +29,29 @@ def read_camera_yaml(path: str | Path) -> CameraModel:
     if b"\x00" in head:
         raise VideoError(path, "is a binary file, expected OpenCV FileStorage YAML")
     try:
-        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ | cv2.FILE_STORAGE_FORMAT_YAML)
-    except (cv2.error, SystemError):  # OpenCV's parser raises either on bad YAML
-        raise VideoError(path, "is not OpenCV FileStorage YAML",
+        doc = opencv_yaml.parse(path.read_bytes().decode("utf-8", errors="strict"))
+    except UnicodeDecodeError:
+        raise VideoError(path, "is not a text file (not UTF-8), expected OpenCV FileStorage YAML") \
+            from None
+    except opencv_yaml.YamlError as exc:
+        raise VideoError(path, f"is not OpenCV FileStorage YAML ({exc})",
                          "it should start with %YAML:1.0 and hold camera_matrix") from None
-    try:
-        if not fs.root().isMap():
-            raise VideoError(path, "is not OpenCV FileStorage YAML with named entries",
-                             "it should hold camera_matrix, distortion_coefficients, …")
-        K = fs.getNode("camera_matrix").mat()
-        dist = fs.getNode("distortion_coefficients").mat()
-        w = fs.getNode("image_width").real()
-        h = fs.getNode("image_height").real()
-        R = fs.getNode("R_WC").mat()
-        T = fs.getNode("T_WC").mat()
-        err = fs.getNode("reprojection_error_px")
-        err = None if err.empty() else float(err.real())
-    except cv2.error:  # a node of the wrong kind (a list where a matrix belongs, …)
-        raise VideoError(path, "has an entry OpenCV cannot read as a matrix or number",
-                         "compare it with a camera.yaml that armtrack calibrate wrote") from None
-    finally:
-        fs.release()
+
+    def matrix(name):
+        v = doc.get(name)
+        if v is not None and not isinstance(v, np.ndarray):
+            raise VideoError(path, f"{name} is not a matrix (!!opencv-matrix)")
+        return v
+
+    def number(name):
+        v = doc.get(name)
+        if v is not None and not isinstance(v, float):
+            raise VideoError(path, f"{name} = {v!r} is not a number")
+        return v
+
+    K, dist, R, T = (matrix(k) for k in ("camera_matrix", "distortion_coefficients", "R_WC", "T_WC"))
+    w, h, err = (number(k) for k in ("image_width", "image_height", "reprojection_error_px"))
+    w, h = (0.0 if v is None else v for v in (w, h))
     if K is None or K.shape != (3, 3):
         raise VideoError(path, "has no 3x3 camera_matrix")
     if not np.isfinite(K).all() or not K[0, 0] < 1e6 or not K[1, 1] < 1e6:

@@ -113,8 +113,30 @@ def read_trajectory(path: Path) -> pd.DataFrame:
     return pd.DataFrame(values, columns=df.columns)
 
 
-def read_kinematics(path: Path) -> dict[str, float]:
-    """kinematics-METHOD.csv as {measure: value} (NaN where the cell is empty)."""
-    df = read_csv_table(path, ("measure", "value", "unit"),
-                        "run `armtrack fuse SESSION --method M` first")
-    return {str(k): float(v) for k, v in zip(df["measure"], numeric(path, df, ["value"])[:, 0])}
+def read_kinematics(path: Path) -> pd.DataFrame:
+    """kinematics-METHOD.csv: a value cell is a number or "not computable: why" (kept as
+    text); sd, t_start and t_end are numbers (sd empty where there is none)."""
+    df = read_csv_table(path, ("measure", "segment", "value", "sd", "unit"),
+                        "run `armtrack fuse SESSION --method M` first (an older armtrack's "
+                        "kinematics file has no segment and sd columns: rerun fuse)")
+    df = df.astype({"measure": str, "segment": str, "unit": str})
+    df["value"] = df["value"].astype(str)
+    text = ~df["value"].str.startswith("not computable") & pd.to_numeric(
+        df["value"], errors="coerce").isna()
+    if text.any():
+        r = int(np.flatnonzero(text)[0])
+        raise DataError(path, f"row {r + 1}: value = {df['value'].iloc[r]!r} is not a number "
+                        "(nor 'not computable: why')", "rerun `armtrack fuse`")
+    cols = [c for c in ("sd", "t_start", "t_end") if c in df]
+    df[cols] = numeric(path, df, cols)
+    return df
+
+
+def read_measures(path: Path) -> pd.DataFrame:
+    """measures.csv (compare): estimate and truth cells stay text; errors are numbers."""
+    df = read_csv_table(path, ("method", "measure", "segment", "estimate", "truth", "error"),
+                        "rerun `armtrack compare SESSION`")
+    df = df.astype({"segment": str, "estimate": str, "truth": str})
+    cols = [c for c in ("error", "error_pct", "estimate_sd") if c in df]
+    df[cols] = numeric(path, df, cols)
+    return df

@@ -110,6 +110,11 @@ def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float 
     dropped = int(np.sum(steps - 1)) if steps is not None else 0
     stf = _vec(tab, ["SampleTimeFine"])
     if stf is not None and np.isfinite(stf).all():
+        bad = (stf[:, 0] < 0) | (stf[:, 0] >= STF_WRAP) | (stf[:, 0] != np.round(stf[:, 0]))
+        if bad.any():
+            r = int(np.flatnonzero(bad)[0])
+            raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine {stf[r, 0]:g} is not "
+                               "a tick count (a whole number from 0 to 2^32 − 1)")
         back = np.diff(stf[:, 0])
         # a wrap at 2^32 jumps back by nearly 2^32; a smaller step back is a damaged row
         bad = (back <= 0) & (back > -STF_WRAP / 2)

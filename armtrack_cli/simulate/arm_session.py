@@ -43,6 +43,7 @@ class ArmSimSettings(CaptureSettings):
     distractor: bool = False
     occlusions: tuple[tuple[float, float], ...] = ()  # (start s, duration s) of a card over the patch
     imu_offset_s: float = -1.0  # session time = IMU time + offset
+    recorded: str = "2026-11-20T10:15:00"  # session.toml [session] recorded (local time)
     declare_imu_offset: bool = True  # False writes imu_offset_s = "auto" (truth keeps the value)
     shoulder: tuple[float, float, float] = (0.12, 0.58, 0.30)
     upper_arm_m: float = 0.31
@@ -160,7 +161,7 @@ def session_toml(s: ArmSimSettings, *, session_id: str, imu_file: str, command: 
     b = BOARD
     return "\n".join([
         f"# simulated by: {command}",
-        "[session]", f'id = "{session_id}"', 'subject = "SIM"', "recorded = 2026-11-20T10:15:00",
+        "[session]", f'id = "{session_id}"', 'subject = "SIM"', f"recorded = {s.recorded}",
         f'task = "{s.task}"', 'side = "right"', "",
         "[arm]", f"upper_arm_m = {s.upper_arm_m:g}", f"forearm_m = {s.forearm_m:g}",
         "shoulder_m = [" + ", ".join(f"{v:g}" for v in s.shoulder) + "]", "",
