@@ -52,6 +52,16 @@ def _quality(work: WorkFolder, method: str) -> dict[str, Any]:
     return row
 
 
+def _measures(work: WorkFolder, method: str) -> dict[str, float]:
+    """Every clinical measure of kinematics-METHOD.csv over the whole session (segment
+    "session"), by name; a measure "not computable" is empty."""
+    if not work.has(f"kinematics-{method}.csv"):
+        return {}
+    k = read_kinematics(work / f"kinematics-{method}.csv")
+    k = k[k["segment"] == "session"]
+    return dict(zip(k["measure"], pd.to_numeric(k["value"], errors="coerce")))
+
+
 def run_one(folder: str, out: str | None, options: dict[str, Any]) -> list[dict[str, Any]]:
     """One session's task: every stage, then its cohort rows (one per method). Never raises
     for bad data: the error becomes the row's ``error``."""
@@ -75,9 +85,7 @@ def run_one(folder: str, out: str | None, options: dict[str, Any]) -> list[dict[
     work = WorkFolder(out_dir(s, out))
     rows = []
     for m in r["methods"]:
-        kin = read_kinematics(work / f"kinematics-{m}.csv") if work.has(
-            f"kinematics-{m}.csv") else {}
-        rows.append({**base, **meta, "method": m, **_quality(work, m), **kin})
+        rows.append({**base, **meta, "method": m, **_quality(work, m), **_measures(work, m)})
     return rows or [{**base, **meta}]
 
 
