@@ -97,3 +97,39 @@ class progress:
         return False
 
 
+
+
+def cohort_run(folders, sessions, out_dir, as_json: bool, run_many, options: dict, *,
+               workers: int, scheduler: str | None) -> None:
+    """`armtrack run` over many sessions (locally or on Dask): a progress bar over sessions,
+    one ``error:`` line per failed session, cohort.csv, and the summary line; exit 1 if any
+    failed. cohort.csv goes to --out DIR, else the folder the sessions are in."""
+    from armtrack_cli.pipeline.batch import summary, write_cohort
+
+    outs = [out_for(out_dir, f, sessions) for f in folders]
+    with progress(len(folders), "sessions", quiet=as_json) as bar:
+        def done(rows):
+            r = rows[0]
+            if r["status"] == "failed":
+                click.echo(f"error: {r['error']}", err=True)
+            elif not as_json:
+                click.echo(f"{r['session']}: {r['status']} ({r.get('stages_run', 0)} stages ran)")
+            for w in filter(None, (r.get("warnings") or "").split(" | ")):
+                click.echo(f"warning: {w}", err=True)
+            bar(bar.done + 1)
+        rows = run_many(folders, outs, workers=workers, scheduler=scheduler, on_done=done,
+                        **options)
+    parents = {os.path.dirname(os.path.abspath(str(f).rstrip("/"))) for f in folders}
+    where = out_dir or (parents.pop() if len(parents) == 1 else ".")
+    cohort = write_cohort(os.path.join(where, "cohort.csv"), rows)
+    line, failed = summary(rows)
+    if as_json:
+        clean = [{k: None if isinstance(v, float) and v != v else v for k, v in r.items()}
+                 for r in rows]  # JSON has no NaN
+        click.echo(json.dumps({"sessions": clean, "cohort": str(cohort), "summary": line},
+                              indent=2, sort_keys=True, default=str))
+    else:
+        click.echo(f"-> {cohort}")
+        click.echo(line)
+    if failed:
+        raise click.exceptions.Exit(1)

@@ -14,7 +14,7 @@ import click
 
 from armtrack_cli import __version__
 from armtrack_cli.cli import text
-from armtrack_cli.cli.batch import each, emit, expand, out_for, progress
+from armtrack_cli.cli.batch import cohort_run, each, emit, expand, out_for, progress
 from armtrack_cli.core.errors import ArmtrackError
 from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
@@ -241,19 +241,57 @@ def report(sessions, output, as_json, out_dir) -> None:
 @click.option("--seed", type=click.IntRange(min=0), help="Random seed (same seed, same bytes).")
 @set_option
 @click.option("--force", is_flag=True, help="Rerun every stage, even those up to date.")
+@click.option("--workers", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Sessions run at once, each a task on a local Dask cluster of N processes "
+              "(needs armtrack[cluster] when N > 1).")
+@click.option("--scheduler", metavar="ADDRESS", help="Run the sessions on this running "
+              "dask.distributed scheduler (e.g. tcp://10.0.0.5:8786) instead.")
 @json_option
 @out_option
-def run(sessions, through, methods, recipe, seed, sets, force, as_json, out_dir) -> None:
+def run(sessions, through, methods, recipe, seed, sets, force, workers, scheduler, as_json,
+        out_dir) -> None:
     """Every stage of each session in order: calibrate -> detect -> fuse -> compare (when
     the session has ground truth). A stage runs only when its inputs are newer than its
-    outputs (as make does), so a rerun after a crash or an edit does only what is needed."""
+    outputs (as make does), so a rerun after a crash or an edit does only what is needed.
+    Several sessions (or a folder of them) also write cohort.csv, one row per session."""
     from armtrack_cli import pipeline
+
+    if scheduler is not None and workers != 1:
+        raise click.UsageError("give --workers or --scheduler, not both")
+    folders = expand(sessions)
+    if len(folders) > 1 or workers > 1 or scheduler is not None:
+        from armtrack_cli.pipeline.batch import run_many
+        opts = {"through": through, "methods": tuple(methods), "recipe": recipe, "sets": sets,
+                "force": force, "seed": seed}
+        return cohort_run(folders, sessions, out_dir, as_json, run_many, opts, workers=workers,
+                          scheduler=scheduler)
 
     def work(folder, out):
         r = pipeline.run(folder, through=through, methods=tuple(methods), recipe=recipe,
                          sets=sets, out=out, force=force, seed=seed)
         summary = {k: v for k, v in r.items() if k != "results"}
         return summary, text.run_lines(folder, r)
+
+    each(sessions, out_dir, as_json, work)
+
+
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("--format", "fmt", type=click.Choice(["tum", "csv", "c3d"]), required=True,
+              help="tum: `t x y z qx qy qz qw` for evo (estimate, and truth at the same frame "
+              "times); csv: the same with a header; c3d: the estimated joints as markers.")
+@click.option("--method", "methods", type=METHOD_CHOICE, multiple=True,
+              help="Methods to export (repeatable); default: every trajectory present.")
+@json_option
+@out_option
+def export(sessions, fmt, methods, as_json, out_dir) -> None:
+    """Trajectories for other tools, into WORK/export/: TUM for evo_ape/evo_traj (check
+    armtrack's errors with `evo_ape tum ekf-wrist.truth.tum ekf-wrist.tum`), CSV, or C3D."""
+    from armtrack_cli.pipeline.export import export as export_session
+
+    def work(folder, out):
+        r = export_session(folder, fmt=fmt, methods=tuple(methods), out=out)
+        return r, [f"{folder}: " + ", ".join(os.path.basename(w) for w in r["written"])]
 
     each(sessions, out_dir, as_json, work)
 

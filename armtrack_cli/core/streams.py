@@ -49,6 +49,7 @@ class MarkerTrajectories:
 
     t:   (N,) float64 s, stream clock from the first frame.
     xyz: (N, M, 3) metres; NaN where the marker was not seen.
+    rotations: (N, M, 3, 3) body -> capture frame for rigid bodies (QTM 6DOF), else None.
     """
 
     path: str
@@ -57,6 +58,7 @@ class MarkerTrajectories:
     xyz: np.ndarray
     rate_hz: float
     notes: tuple[str, ...] = field(default_factory=tuple)
+    rotations: np.ndarray | None = None
 
     def marker(self, name: str) -> np.ndarray:
         """(N, 3) positions of one marker."""

@@ -8,27 +8,17 @@ from typing import Any
 import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
-from armtrack_cli.compare.score import JOINTS, Truth, score, truth_markers
+from armtrack_cli.compare.score import JOINTS, score, truth_markers
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.methods import METHODS
 from armtrack_cli.pipeline.common import out_dir
+from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
 from armtrack_cli.pipeline.palm import compare_palm
-from armtrack_cli.session.config import Session, load_session, require
+from armtrack_cli.session.config import load_session, require
 from armtrack_cli.session.outputs import output_set, write_table
-from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.tables import read_kinematics, read_trajectory
 from armtrack_cli.session.workfolder import WorkFolder
-
-
-def read_truth(session: Session) -> Truth:
-    """The [groundtruth] markers, in W, on the session clock."""
-    gt = session.groundtruth
-    qtm = read_qualisys(gt.file)
-    cols = select_markers(qtm, gt.markers, session.toml_path)
-    t = qtm.t + session.offset_s("groundtruth_offset_s")  # session time = stream time + offset
-    return Truth(t, {j: to_world(qtm.xyz[:, c], gt.to_world) for j, c in cols.items()},
-                 qtm.rate_hz)  # every named marker: joints, or a palm session's markers
 
 
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),

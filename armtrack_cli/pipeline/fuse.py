@@ -66,7 +66,8 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
                         f"video is {video.width}x{video.height}", "rerun `armtrack calibrate`")
     t_f, uv = read_patch_detections(dest / "detections.csv", width=cam.width, height=cam.height,
                                     n_frames=video.n_frames)
-    imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic)
+    imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
+                   field=session.imu.field)
     ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
     t_imu = imu.t[ok] + session.offset_s("imu_offset_s")  # session time = stream time + offset
     q_imu = imu.quat[ok]

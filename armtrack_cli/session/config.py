@@ -16,6 +16,7 @@ import numpy as np
 from armtrack_cli.core.errors import ConfigError, did_you_mean
 from armtrack_cli.core.limits import MAX_BOARD_SQUARES
 from armtrack_cli.session.files import read_small_text
+from armtrack_cli.session.point_expr import point_markers
 from armtrack_cli.session.session_types import (  # noqa: F401  (re-exported for the stages)
     ArmConfig,
     BoardConfig,
@@ -198,12 +199,15 @@ def _camera(path: Path, root: Path, table: Any) -> CameraConfig:
 
 
 def _imu(path: Path, root: Path, table: Any) -> ImuConfig:
-    sec = _Section(path, "imu", table, ("file", "forearm_axis", "rate_hz", "topic"))
+    sec = _Section(path, "imu", table, ("file", "forearm_axis", "rate_hz", "topic", "field"))
     f = sec.string("file", required=True)
     axis = sec.string("forearm_axis", default="+y", choices=AXES)
     rate = sec.number("rate_hz", lo=1.0, hi=10000.0, unit="Hz")
     topic = sec.string("topic")
-    return ImuConfig(root / f, axis, rate, topic)
+    field = sec.string("field")
+    if field is not None and not all(p.isidentifier() for p in field.split(".")):
+        sec.fail("field", f"= {field!r} is not a dotted field path", 'write e.g. "imu" or "data.imu"')
+    return ImuConfig(root / f, axis, rate, topic, field)
 
 
 def _palm(path: Path, table: Any) -> PalmConfig:
@@ -230,7 +234,8 @@ def _palm(path: Path, table: Any) -> PalmConfig:
 
 
 def _groundtruth(path: Path, root: Path, table: Any, palm: PalmConfig | None) -> GroundTruthConfig:
-    sec = _Section(path, "groundtruth", table, ("file", "markers", "to_world"))
+    sec = _Section(path, "groundtruth", table, ("file", "markers", "to_world", "static",
+                                                "clusters", "hand"))
     f = sec.string("file", required=True)
     markers = sec.get("markers", default={})
     roles = ARM_ROLES + (palm.markers if palm else ())
@@ -240,8 +245,9 @@ def _groundtruth(path: Path, root: Path, table: Any, palm: PalmConfig | None) ->
         if role not in roles:
             sec.fail(f"markers.{role}", "is not a joint armtrack scores",
                      did_you_mean(role, roles, what="joints"))
-        if not isinstance(name, str) or not name:
-            sec.fail(f"markers.{role}", f"= {name!r} is not a marker name")
+        if not isinstance(name, str) or not name or point_markers(name) is None:
+            sec.fail(f"markers.{role}", f"= {name!r} is not a marker name",
+                     'write a marker ("R_WRI") or the midpoint of several ("mid(RLEP, RMEP)")')
     tw = sec.get("to_world", default=np.eye(4).tolist())
     try:
         T = np.array(tw, dtype=float)
@@ -255,7 +261,31 @@ def _groundtruth(path: Path, root: Path, table: Any, palm: PalmConfig | None) ->
         sec.fail("to_world", "is not a rigid transform",
                  "its 3x3 block must be a rotation (orthonormal, det +1), its last row [0,0,0,1], "
                  "and its translation in metres")
-    return GroundTruthConfig(root / f, dict(markers), T)
+    static = sec.string("static")
+    hand = sec.string("hand")
+    return GroundTruthConfig(root / f, dict(markers), T, root / static if static else None,
+                             _clusters(sec), hand)
+
+
+def _clusters(sec: _Section) -> dict[str, tuple[str, ...]]:
+    """[groundtruth] clusters: landmark -> the markers of the rigid cluster that carries it
+    (a list of at least 3 names, or a prefix: "RUAR" = RUAR1, RUAR2, … in the file)."""
+    v = sec.get("clusters", default={})
+    if not isinstance(v, dict):
+        sec.fail("clusters", f"is {_describe(v)}, expected {{ RLEP = \"RUAR\", … }}")
+    out = {}
+    for landmark, c in v.items():
+        if isinstance(c, str) and c:
+            out[landmark] = (c + "*",)
+        elif isinstance(c, list) and len(c) >= 3 and all(isinstance(x, str) and x for x in c):
+            out[landmark] = tuple(c)
+        else:
+            sec.fail(f"clusters.{landmark}", f"= {c!r} is neither a marker prefix nor a list of "
+                     "at least 3 marker names", "a rigid fit needs 3 or more cluster markers")
+    if out and sec.table.get("static") is None:
+        sec.fail("clusters", "needs [groundtruth] static, the calibration trial holding the "
+                 "landmarks", 'add static = "…_static.csv"')
+    return out
 
 
 def _offset(sec: _Section, key: str) -> float | str:

@@ -23,14 +23,20 @@ FORMATS = "Xsens MT Manager export, Xsens DOT CSV, generic CSV (t,ax,ay,az,gx,gy
 
 
 def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | None = None,
-             estimate: bool = True) -> ImuSamples:
-    """Load an IMU recording into contract conventions (B frame, SI, quaternions B -> W)."""
+             field: str | None = None, estimate: bool = True,
+             complete: bool = True) -> ImuSamples:
+    """Load an IMU recording into contract conventions (B frame, SI, quaternions B -> W).
+
+    ``complete=False`` (for ``info``) also returns exports that hold orientation only or
+    acceleration only, their absent channels NaN; the fusion methods read with
+    ``complete=True``, which refuses them naming what is missing (``require_channels``).
+    """
     path = regular_file(path, ImuFileError, f"an IMU file ({FORMATS})",
                         hint="check [imu] file in session.toml", max_bytes=MAX_TEXT_BYTES)
     with open(path, "rb") as f:
         head = f.read(8)
     if head == imu_mcap.MAGIC:
-        samples = imu_mcap.read_mcap_imu(path, topic=topic)
+        samples = imu_mcap.read_mcap_imu(path, topic=topic, field=field)
     else:
         if head.startswith(b"\x89MCAP"):
             raise ImuFileError(path, "is a damaged MCAP file (bad magic)")
@@ -46,12 +52,12 @@ def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | Non
             raise ImuFileError(path, f"is not an IMU format armtrack reads (starts {first!r})",
                                f"expected {FORMATS}")
     check_units(samples)
+    if complete:
+        require_channels(samples)
     check_usable(samples)
     if samples.n < 2:
         raise ImuFileError(path, f"holds {samples.n} sample: too short to use")
-    if samples.quat is None and estimate:
-        if np.isnan(samples.gyr).all():
-            raise ImuFileError(path, "has no orientation and no gyroscope to estimate it from")
+    if samples.quat is None and estimate and not np.isnan(samples.gyr).all():
         q = estimate_orientation(samples.gyr, samples.acc, samples.mag, samples.rate_hz)
         source = "estimated (VQF, gyro+acc+mag)" if samples.mag is not None else \
             "estimated (VQF, gyro+acc)"
@@ -59,11 +65,41 @@ def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | Non
     return samples
 
 
+def acc_absent(s: ImuSamples) -> bool:
+    """The export has no accelerometer columns at all (its reader noted so): info describes
+    it; fusion refuses it. Columns present but empty are damage (``check_usable``)."""
+    return any(n.startswith("no accelerometer") for n in s.notes)
+
+
+def missing_channels(s: ImuSamples) -> list[str]:
+    """What the fusion methods need that the recording lacks (empty: all there)."""
+    lack = []
+    if acc_absent(s):
+        lack.append("accelerometer")
+    if s.quat is None and np.isnan(s.gyr).all():
+        lack.append("orientation (or a gyroscope to estimate it)")
+    return lack
+
+
+def require_channels(s: ImuSamples) -> None:
+    """Refuse a recording the fusion methods cannot use, naming what it lacks."""
+    path = Path(s.path)
+    if acc_absent(s):
+        raise ImuFileError(path, "has no Acc_X/Acc_Y/Acc_Z columns (no accelerometer): every "
+                           "fusion method integrates acceleration",
+                           "export the accelerometer (or FreeAcc with orientation); "
+                           "`armtrack info` describes what the file holds")
+    if s.quat is None and np.isnan(s.gyr).all():
+        raise ImuFileError(path, "has no orientation and no gyroscope to estimate it from",
+                           "export Gyr_X..Z or an orientation (quaternion, matrix or Euler); "
+                           "`armtrack info` describes what the file holds")
+
+
 def check_usable(s: ImuSamples) -> None:
     """Refuse a recording that has no usable sample, a physically impossible one, or a clock
     that runs for longer than any session (a damaged time column)."""
     path = Path(s.path)
-    if not np.isfinite(s.acc).all(axis=1).any():
+    if not acc_absent(s) and not np.isfinite(s.acc).all(axis=1).any():
         raise ImuFileError(path, "has no usable accelerometer sample (every row is empty or NaN)",
                            "export the accelerometer (Acc_X..Z or ax, ay, az)")
     if s.quat is not None and not np.isfinite(s.quat).all(axis=1).any():

@@ -3,6 +3,8 @@
 ROS stores quaternions as (x, y, z, w); they are reordered to (w, x, y, z) here. An
 ``orientation_covariance[0] == -1`` means the message carries no orientation (REP 145).
 Times: ``header.stamp`` when set, else the log time; taken relative to the first sample.
+An Imu (and MagneticField) nested inside a driver's own message is found by walking its ROS 2
+schema (``ros2_schema``); ``[imu] field`` names the path when there is more than one.
 """
 
 from __future__ import annotations
@@ -15,9 +17,11 @@ import numpy as np
 from armtrack_cli.core.errors import DataError, ImuFileError
 from armtrack_cli.core.streams import ImuSamples
 from armtrack_cli.session.imu_checks import rate_and_dropped, unit_quaternions
+from armtrack_cli.session.ros2_schema import field_paths, get_path
 
 MAGIC = b"\x89MCAP0\r\n"
 IMU_SCHEMAS = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")
+TESLA_TO_UT = 1e6  # sensor_msgs/MagneticField is in tesla; armtrack's magnetometer in µT
 
 
 def open_summary(path: Path, error: type[DataError]):
@@ -81,18 +85,21 @@ def _stamp(msg_header_stamp, log_time_ns: int) -> float:
     return sec + nsec * 1e-9 if (sec or nsec) else log_time_ns * 1e-9
 
 
-def _decode_cdr(reader, topic):
+def _decode_cdr(reader, topic, field="", mag_field=None):
     from mcap_ros2.decoder import DecoderFactory
 
     rows = []
     factory = DecoderFactory()
     for schema, channel, message in reader.iter_messages(topics=[topic]):
         decode = factory.decoder_for(channel.message_encoding, schema)
-        m = decode(message.data)
+        outer = decode(message.data)
+        m = get_path(outer, field)
         o, w, a = m.orientation, m.angular_velocity, m.linear_acceleration
+        b = get_path(outer, mag_field).magnetic_field if mag_field else None
         rows.append((_stamp((m.header.stamp.sec, m.header.stamp.nanosec), message.log_time),
                      o.w, o.x, o.y, o.z, float(m.orientation_covariance[0]),
-                     w.x, w.y, w.z, a.x, a.y, a.z))
+                     w.x, w.y, w.z, a.x, a.y, a.z)
+                    + ((b.x * TESLA_TO_UT, b.y * TESLA_TO_UT, b.z * TESLA_TO_UT) if b else ()))
     return rows
 
 
@@ -114,14 +121,73 @@ def _decode_json(reader, topic, path):
     return rows
 
 
-def read_mcap_imu(path: Path, *, topic: str | None = None) -> ImuSamples:
+def _schemas(reader, path: Path) -> dict[str, tuple[str, str, str]]:
+    """{topic: (schema name, schema text, message encoding)}."""
+    summary = reader.get_summary()
+    if summary is not None:
+        return {c.topic: (summary.schemas[c.schema_id].name,
+                          summary.schemas[c.schema_id].data.decode("utf-8", "replace"),
+                          c.message_encoding)
+                for c in summary.channels.values() if c.schema_id in summary.schemas}
+    out = {}
+    try:
+        for schema, channel, _ in reader.iter_messages():
+            if schema is not None:
+                out[channel.topic] = (schema.name, schema.data.decode("utf-8", "replace"),
+                                      channel.message_encoding)
+    except Exception as exc:
+        raise ImuFileError(path, f"is a damaged or truncated MCAP ({type(exc).__name__})") from None
+    return out
+
+
+def find_imu(path: Path, schemas: dict, topic: str | None, field: str | None
+             ) -> tuple[str, str, str, str | None]:
+    """(topic, encoding, Imu field path ('' = the message itself), MagneticField path or None)
+    for the one IMU stream: a ``sensor_msgs/Imu`` topic, or an Imu field inside a topic's
+    message found by walking its ROS 2 schema."""
+    found = []
+    for tp, (name, text, enc) in sorted(schemas.items()):
+        if topic is not None and tp != topic:
+            continue
+        paths = [""] if name in IMU_SCHEMAS else (
+            field_paths(name, text, "sensor_msgs/Imu") if enc == "cdr" else [])
+        if field is not None:
+            if field not in paths:
+                if topic is not None:
+                    raise ImuFileError(path, f"topic {tp}: its message ({name}) has no "
+                                       f"sensor_msgs/Imu field {field!r}",
+                                       "Imu fields found: " + (", ".join(paths) or "none"))
+                continue
+            paths = [field]
+        mags = field_paths(name, text, "sensor_msgs/MagneticField") if enc == "cdr" else []
+        found += [(tp, enc, p, mags[0] if len(mags) == 1 else None, name) for p in paths]
+    key = "[imu] topic"
+    if topic is not None and topic not in schemas:
+        raise ImuFileError(path, f"has no IMU topic {topic!r}", f"check {key} in session.toml")
+    if not found:
+        have = ", ".join(f"{t} ({s[0] or 'no schema'})" for t, s in sorted(schemas.items()))
+        raise ImuFileError(path, "has no IMU messages (sensor_msgs/msg/Imu, alone or as a field "
+                           "of another message)", f"it holds: {have or 'no channels'}")
+    if len({f[0] for f in found}) > 1:
+        raise ImuFileError(path, "has several IMU topics: " + ", ".join(sorted({f[0] for f in
+                           found})), f"name one with {key} in session.toml")
+    if len(found) > 1:
+        raise ImuFileError(path, f"topic {found[0][0]}: its message ({found[0][4]}) holds "
+                           f"several sensor_msgs/Imu fields: {', '.join(f[2] for f in found)}",
+                           "name one with [imu] field in session.toml")
+    return found[0][:4]
+
+
+def read_mcap_imu(path: Path, *, topic: str | None = None, field: str | None = None
+                  ) -> ImuSamples:
     reader, f = open_summary(path, ImuFileError)
     try:
-        chans = channels(reader, path, ImuFileError)
-        topic, encoding = pick_topic(path, chans, IMU_SCHEMAS, topic, ImuFileError, "IMU",
-                                     "[imu] topic")
+        topic, encoding, field, mag_field = find_imu(path, _schemas(reader, path), topic, field)
+        if field and encoding != "cdr":
+            raise ImuFileError(path, f"topic {topic}: [imu] field is read from CDR (ROS 2) "
+                               f"messages only, not {encoding!r}")
         try:
-            rows = (_decode_cdr(reader, topic) if encoding == "cdr"
+            rows = (_decode_cdr(reader, topic, field, mag_field) if encoding == "cdr"
                     else _decode_json(reader, topic, path) if encoding == "json" else None)
         except ImuFileError:
             raise
@@ -145,7 +211,10 @@ def read_mcap_imu(path: Path, *, topic: str | None = None) -> ImuSamples:
                            "before it")
     q = a[:, 1:5]  # ROS (x, y, z, w) was reordered to (w, x, y, z) when decoding
     has_q = a[:, 5] != -1.0
-    notes: list[str] = [f"topic {topic}"]
+    notes: list[str] = [f"topic {topic}" + (f", field {field}" if field else "")]
+    mag = a[:, 12:15] if a.shape[1] >= 15 else None
+    if mag is not None:
+        notes.append(f"magnetometer from field {mag_field} (T -> µT)")
     if not has_q.any():
         q = None
     else:
@@ -154,5 +223,5 @@ def read_mcap_imu(path: Path, *, topic: str | None = None) -> ImuSamples:
         q = unit_quaternions(path, q, lambda r: f"topic {topic}: message {r}", "orientation",
                              "set orientation_covariance[0] = -1 when there is no orientation")
     rate, dropped = rate_and_dropped(t)
-    return ImuSamples(str(path), "mcap", t, a[:, 9:12], a[:, 6:9], None, q, rate, dropped,
+    return ImuSamples(str(path), "mcap", t, a[:, 9:12], a[:, 6:9], mag, q, rate, dropped,
                       "file" if q is not None else "none", tuple(notes))

@@ -17,9 +17,11 @@ from armtrack_cli.core.methods import BUILT, NEEDS
 from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStream, time_gaps
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session, load_session
+from armtrack_cli.session.groundtruth import read_markers
 from armtrack_cli.session.images import IMAGE_EXT
-from armtrack_cli.session.imu import read_imu
-from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
+from armtrack_cli.session.imu import missing_channels, read_imu
+from armtrack_cli.session.point_expr import point_markers
+from armtrack_cli.session.qualisys import select_markers, to_world
 from armtrack_cli.session.video import probe_video
 
 
@@ -40,6 +42,9 @@ def describe_imu(s: ImuSamples, offset: float | str) -> dict[str, Any]:
         "dropped_samples": s.dropped, "gaps": int(gaps.size),
         "largest_gap_s": round(float(np.diff(s.t).max()), 4) if s.n > 1 else 0.0,
         "orientation": s.orientation_source, "magnetometer": s.mag is not None,
+        "accelerometer": bool(np.isfinite(s.acc).any()),
+        "gyroscope": bool(np.isfinite(s.gyr).any()),
+        "missing_for_fusion": missing_channels(s),
         "empty_channels": empty, "notes": list(s.notes),
     }
 
@@ -54,7 +59,8 @@ def describe_video(v: VideoStream) -> dict[str, Any]:
 def describe_markers(m: MarkerTrajectories, offset: float | str) -> dict[str, Any]:
     missing = np.isnan(m.xyz[..., 0])
     return {
-        "file": m.path, "markers": list(m.names), "rate_hz": m.rate_hz, "frames": int(m.t.size),
+        "file": m.path, ("bodies" if m.rotations is not None else "markers"): list(m.names),
+        "rate_hz": m.rate_hz, "frames": int(m.t.size),
         "duration_s": round(float(m.t[-1] - m.t[0]), 4),
         "span_s": _span(m.t, offset),
         "missing_pct": {n: round(100.0 * float(missing[:, k].mean()), 2)
@@ -92,10 +98,11 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
     have: set[str] = set()
     if session.imu is not None:
         s = read_imu(session.imu.file, rate_hz=session.imu.rate_hz or imu_rate_hz,
-                     topic=session.imu.topic)
+                     topic=session.imu.topic, field=session.imu.field, complete=False)
         out["imu"] = describe_imu(s, session.sync.imu_offset_s)
         out["imu"]["forearm_axis"] = session.imu.forearm_axis
-        have.add("imu")
+        if not out["imu"]["missing_for_fusion"]:
+            have.add("imu")
     cam = session.camera
     if cam is not None and cam.video is not None:
         out["video"] = describe_video(probe_video(cam.video))
@@ -132,27 +139,43 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
         out["palm"] = {"markers": list(session.palm.markers), "link_m": list(session.palm.link_m)}
         have.add("palm")
     if session.groundtruth is not None:
-        m = read_qualisys(session.groundtruth.file)
-        cols = select_markers(m, session.groundtruth.markers, session.toml_path)
+        m = read_markers(session.groundtruth.file)
+        cols = select_markers(m, {r: e for r, e in session.groundtruth.markers.items()
+                                  if e in m.names or e not in session.groundtruth.clusters
+                                  and point_markers(e) == (e,)}, session.toml_path)
         out["groundtruth"] = describe_markers(m, session.sync.groundtruth_offset_s)
         out["groundtruth"]["named"] = dict(session.groundtruth.markers)
+        if session.groundtruth.static is not None:
+            out["groundtruth"]["static"] = describe_markers(
+                read_markers(session.groundtruth.static), 0.0)
         reach = check_reach(session, m, cols)
         if reach:
             out["groundtruth"]["reach"] = reach
         have.add("groundtruth")
-    out["methods"] = readiness(session, have)
+    lacks = {"imu": "an IMU with " + " and ".join(out["imu"]["missing_for_fusion"])} \
+        if "imu" in out and "imu" not in have else {}
+    out["methods"] = readiness(session, have, lacks)
     return out
 
 
-def readiness(session: Session, have: set[str]) -> dict[str, str]:
-    """For each command/method: 'ready' or what the session still lacks."""
+def readiness(session: Session, have: set[str], lacks: dict[str, str] | None = None
+              ) -> dict[str, str]:
+    """For each command/method: 'ready' or what the session still lacks (``lacks`` words a
+    requirement that is present but incomplete, e.g. an IMU export without accelerometer)."""
     out = {}
+    lacks = lacks or {}
     for name, req in {**NEEDS, "compare": ("groundtruth",)}.items():
-        lack = [r for r in req if r not in have]
+        lack = [lacks.get(r, r) for r in req if r not in have]
         out[name] = "ready" if not lack else "needs " + ", ".join(lack)
         if name in NEEDS and name not in BUILT and not lack:
             out[name] = "data ready; the method is not in this version yet"
     return out
+
+
+def _head(path: Path, n: int = 32) -> bytes:
+    """The first bytes of a file (a Vicon CSV starts with 'Trajectories')."""
+    with open(path, "rb") as f:
+        return f.read(n)
 
 
 VIDEO_EXT = (".mp4", ".avi", ".mkv", ".mov", ".m4v")
@@ -169,11 +192,12 @@ def describe_path(path: Path, *, imu_rate_hz: float | None = None) -> dict[str, 
                                        "task": None, "side": "right", "kind": "file",
                                        "recorded": None}, "methods": {}}
     suffix = path.suffix.lower()
-    if suffix == ".tsv":
-        out["groundtruth"] = describe_markers(read_qualisys(path), 0.0)
+    if suffix in (".tsv", ".c3d") or suffix == ".csv" and _head(path).lstrip(
+            b"\xef\xbb\xbf").lower().startswith(b"trajectories"):
+        out["groundtruth"] = describe_markers(read_markers(path), 0.0)
     elif suffix in VIDEO_EXT:
         out["video"] = describe_video(probe_video(path))
     else:
-        out["imu"] = describe_imu(read_imu(path, rate_hz=imu_rate_hz), 0.0)
+        out["imu"] = describe_imu(read_imu(path, rate_hz=imu_rate_hz, complete=False), 0.0)
         out["imu"]["forearm_axis"] = "+y"
     return out

@@ -128,14 +128,22 @@ def select_markers(traj: MarkerTrajectories, wanted: dict[str, str], toml: Path)
     out = {}
     for role, name in wanted.items():
         if name not in traj.names:
-            raise GroundTruthError(traj.path, f"has no marker {name!r} ([groundtruth] markers."
-                                   f"{role} in {toml.name})",
-                                   f"its markers are {', '.join(traj.names)}")
+            raise missing_marker(traj, name, f"[groundtruth] markers.{role} in {toml.name}")
         out[role] = traj.names.index(name)
         if not np.isfinite(traj.xyz[:, out[role]]).all(axis=1).any():
             raise GroundTruthError(traj.path, f"marker {name!r} ({role}) is never seen: every "
                                    "frame is a gap", "check the marker labels in QTM")
     return out
+
+
+def missing_marker(traj: MarkerTrajectories, name: str, where: str) -> GroundTruthError:
+    """The error for a marker the file lacks; a 6DOF export says it holds bodies, not markers."""
+    if traj.rotations is not None:
+        return GroundTruthError(traj.path, f"is a 6DOF (rigid body) export with no body {name!r} "
+                                f"({where})", f"its bodies are {', '.join(traj.names)}: name a "
+                                "body there, or export 3D markers from QTM")
+    return GroundTruthError(traj.path, f"has no marker {name!r} ({where})",
+                            f"its markers are {', '.join(traj.names)}")
 
 
 def to_world(xyz: np.ndarray, T: np.ndarray) -> np.ndarray:

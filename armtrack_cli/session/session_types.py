@@ -3,7 +3,7 @@ session/config.py reads and validates the file into them."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -66,6 +66,7 @@ class ImuConfig:
     forearm_axis: str
     rate_hz: float | None
     topic: str | None
+    field: str | None = None  # MCAP: dotted path of the sensor_msgs/Imu inside the message
 
     @property
     def forearm_unit(self) -> np.ndarray:
@@ -87,6 +88,9 @@ class GroundTruthConfig:
     file: Path
     markers: dict[str, str]  # role (shoulder/elbow/wrist or a palm marker) -> QTM marker name
     to_world: np.ndarray  # (4, 4) Qualisys frame (m) -> W
+    static: Path | None = None  # Vicon/C3D static calibration trial holding the landmarks
+    clusters: dict[str, tuple[str, ...]] = field(default_factory=dict)  # landmark -> cluster
+    hand: str | None = None  # QTM 6DOF rigid body whose rotation is the hand frame H
 
 
 @dataclass(frozen=True)

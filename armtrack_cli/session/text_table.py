@@ -64,14 +64,35 @@ def read_text_lines(path: Path, error: type[DataError], what: str) -> list[str]:
 
 
 def sniff_delimiter(header: str) -> str | None:
-    """Tab, semicolon or comma by count in the header; None means runs of spaces."""
+    """Tab, semicolon or comma by count in the header; else " " when the header's names are
+    separated by single spaces (MT Manager 2022's space export, whose empty fields are
+    consecutive single spaces), None for runs of spaces (aligned columns)."""
     counts = {d: header.count(d) for d in ("\t", ";", ",")}
     best = max(counts, key=counts.get)
-    return best if counts[best] > 0 else None
+    if counts[best] > 0:
+        return best
+    names = header.strip().split(" ")
+    return " " if len(names) > 1 and "" not in names else None
 
 
 def split_row(line: str, delimiter: str | None) -> list[str]:
-    return line.split() if delimiter is None else [c.strip() for c in line.split(delimiter)]
+    """Fields of one row. " " splits field by field (two spaces = an empty field between)."""
+    if delimiter is None:
+        return line.split()
+    if delimiter == " ":
+        return line.strip("\r\n").split(" ")
+    return [c.strip() for c in line.split(delimiter)]
+
+
+def _fields(line: str, delimiter: str | None, n: int) -> list[str]:
+    """Fields of a data row; a single-space row whose fields are aligned with runs of spaces
+    (and so does not split into n field by field) falls back to runs of spaces."""
+    cells = split_row(line, delimiter)
+    while len(cells) > n and cells[-1] == "":
+        cells.pop()
+    if delimiter == " " and len(cells) != n and len(line.split()) == n:
+        return line.split()
+    return cells
 
 
 def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | None,
@@ -93,15 +114,13 @@ def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | N
     body = [(i, ln) for i, ln in enumerate(lines[header_at + 1:], start=header_at + 2)
             if ln.strip() and not ln.startswith(skip_prefixes)]
     for k, (i, ln) in enumerate(body):
-        cells = split_row(ln, delimiter)
-        while len(cells) > n and cells[-1] == "":
-            cells.pop()
+        cells = _fields(ln, delimiter, n)
         if len(cells) != n:
             if k == len(body) - 1 and len(cells) < n and rows:
                 notes.append(f"last line {i} has {len(cells)} of {n} fields (truncated write): "
                              "dropped")
                 break
-            sep = {"\t": "tab", ",": "comma", ";": "semicolon", None: "space"}[delimiter]
+            sep = {"\t": "tab", ",": "comma", ";": "semicolon", " ": "space", None: "space"}[delimiter]
             raise error(path, f"line {i} has {len(cells)} fields but the header has {n} "
                         f"({sep}-separated)", "is the file cut short or mixing delimiters?")
         rows.append(cells)

@@ -181,27 +181,30 @@ def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_ra
             q = quat.multiply(Q_NED_TO_ZUP, q)
             notes.append("orientation converted from NED to z-up (180° about x)")
     acc = _vec(tab, ["Acc_X", "Acc_Y", "Acc_Z"])
+    absent: set[str] = set()  # channel groups the file does not export at all
     if acc is None:
         free = _vec(tab, ["FreeAcc_X", "FreeAcc_Y", "FreeAcc_Z"])
-        if free is None or q is None:
-            raise ImuFileError(path, "has no Acc_X/Acc_Y/Acc_Z columns",
-                               f"export the accelerometer; columns seen: {', '.join(tab.header)}")
-        # FreeAcc = a_W (gravity removed, global frame): f_B = R_WBᵀ (a_W − g_W)
-        acc = quat.rotate(quat.conjugate(q), free + np.array([0.0, 0.0, GRAVITY]))
-        notes.append("specific force rebuilt from FreeAcc and orientation")
+        if free is None or q is None:  # described by info; fuse refuses (imu.require_channels)
+            acc = np.full((tab.data.shape[0], 3), np.nan)
+            absent.add("Acc")
+            notes.append("no accelerometer (Acc_X/Acc_Y/Acc_Z) columns; columns seen: "
+                         + ", ".join(tab.header))
+        else:
+            # FreeAcc = a_W (gravity removed, global frame): f_B = R_WBᵀ (a_W − g_W)
+            acc = quat.rotate(quat.conjugate(q), free + np.array([0.0, 0.0, GRAVITY]))
+            notes.append("specific force rebuilt from FreeAcc and orientation")
     gyr = _vec(tab, ["Gyr_X", "Gyr_Y", "Gyr_Z"])
     if gyr is None:
-        if q is None:
-            raise ImuFileError(path, "has neither gyroscope (Gyr_X..Z) nor orientation columns",
-                               "export Gyr_X..Z or an orientation (quaternion, matrix or Euler)")
         gyr = np.full_like(acc, np.nan)
-        notes.append("no gyroscope columns")
+        absent.add("Gyr")
+        notes.append("no gyroscope columns" if q is not None else
+                     "neither gyroscope (Gyr_X..Z) nor orientation columns")
     else:
         gyr = gyr * gyro_scale
     mag = _vec(tab, ["Mag_X", "Mag_Y", "Mag_Z"])
     for name, arr in (("Acc", acc), ("Gyr", gyr)):
         for k, ax in enumerate("XYZ"):
-            if np.isnan(arr[:, k]).all() and not (name == "Gyr" and "no gyroscope columns" in notes):
+            if name not in absent and np.isnan(arr[:, k]).all():
                 notes.append(f"{name}_{ax} is empty (NaN) in every row")
     return ImuSamples(str(path), fmt, t, acc, gyr, mag, q, rate, dropped,
                       "file" if q is not None else "none", tuple(notes + tnotes + list(tab.notes)))

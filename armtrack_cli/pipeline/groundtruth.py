@@ -1,0 +1,84 @@
+"""The ground truth compare scores against, whatever the lab exported: each joint named in
+[groundtruth] markers (a marker, or mid(…) of several), in W, on the session clock.
+
+A marker that [groundtruth] clusters names is an anatomical landmark from the static trial,
+carried by its cluster (compare.joint_centres, CAST), whether or not the trial has a column
+for it (Nexus exports the unworn landmarks as empty columns).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armtrack_cli.compare import hand_truth, joint_centres
+from armtrack_cli.compare.score import Truth
+from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.streams import MarkerTrajectories
+from armtrack_cli.session.config import Session
+from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
+from armtrack_cli.session.point_expr import point_markers
+from armtrack_cli.session.qualisys import missing_marker, to_world
+
+
+def _columns(traj: MarkerTrajectories, names: list[str], what: str) -> np.ndarray:
+    missing = [n for n in names if n not in traj.names]
+    if missing:
+        raise GroundTruthError(traj.path, f"has no marker {missing[0]!r} ({what})",
+                               f"its markers are {', '.join(traj.names)}")
+    return np.stack([traj.marker(n) for n in names], axis=1)
+
+
+def marker_track(session: Session, traj: MarkerTrajectories, name: str,
+                 static: MarkerTrajectories | None) -> np.ndarray:
+    """(N, 3) one marker of the trial, or a landmark carried by its cluster (capture frame)."""
+    gt = session.groundtruth
+    if name in traj.names and name not in gt.clusters:
+        return traj.marker(name)
+    if name not in gt.clusters:
+        raise missing_marker(traj, name, f"[groundtruth] markers in {session.toml_path.name}; a "
+                             "landmark seen only in the static trial needs [groundtruth] clusters")
+    names = joint_centres.cluster_names(static.names, gt.clusters[name])
+    if len(names) < 3:
+        raise GroundTruthError(static.path, f"has {len(names)} markers of the cluster carrying "
+                               f"{name!r}: a rigid fit needs at least 3")
+    ref, point = joint_centres.calibrate(_columns(static, names, "cluster, static trial"),
+                                         _columns(static, [name], "landmark")[:, 0])
+    return joint_centres.carry(ref, point, _columns(traj, names, f"cluster carrying {name}"))
+
+
+def joint_points(session: Session, traj: MarkerTrajectories) -> dict[str, np.ndarray]:
+    """role -> (N, 3) m in the capture frame, for every role [groundtruth] markers names."""
+    gt = session.groundtruth
+    static = read_markers(gt.static) if gt.static is not None else None
+    out = {}
+    for role, expr in gt.markers.items():
+        tracks = [marker_track(session, traj, n, static) for n in point_markers(expr)]
+        out[role] = np.mean(tracks, axis=0)  # mid(...): a gap in any marker is a gap
+        if not np.isfinite(out[role]).all(axis=1).any():
+            raise GroundTruthError(traj.path, f"marker {expr!r} ({role}) is never seen: every "
+                                   "frame is a gap", "check the marker labels in the capture "
+                                   "software (and [groundtruth] clusters for landmarks)")
+    return out
+
+
+def read_truth(session: Session) -> Truth:
+    """The [groundtruth] joints in W, on the session clock (session time = stream + offset)."""
+    gt = session.groundtruth
+    traj = read_markers(gt.file)
+    pts = joint_points(session, traj)
+    t = traj.t + session.offset_s("groundtruth_offset_s")
+    return Truth(t, {j: to_world(p, gt.to_world) for j, p in pts.items()},
+                 traj.rate_hz)  # every named point: joints, or a palm session's markers
+
+
+def read_hand_angles(session: Session) -> tuple[np.ndarray, np.ndarray] | None:
+    """(t on the session clock (M,), wrist angles (M, 3) deg: flexion, deviation, pronation)
+    from the QTM 6DOF body [groundtruth] hand names, or None when it names none. For palm
+    sessions' wrist angles to be scored against (compare.hand_truth)."""
+    gt = session.groundtruth
+    if gt is None or gt.hand is None:
+        return None
+    traj = read_markers(gt.file)
+    R_WH = body_rotation_W(traj, gt.hand, gt.to_world, session.toml_path)
+    t = traj.t + session.offset_s("groundtruth_offset_s")
+    return t, hand_truth.wrist_angles_deg(t, R_WH, session.meta.side)
