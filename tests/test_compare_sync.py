@@ -45,3 +45,32 @@ def test_no_overlap_gives_none():
     t = np.arange(100) / 30.0
     assert estimate_offset(t, _motion(t), np.arange(100) / 100.0 + 50.0, _motion(t)[:100], 100.0,
                            search_s=1.0) is None
+
+
+def test_compare_with_auto_and_with_a_wrong_declared_offset(tmp_path):
+    """circle-01's Qualisys runs 1.5 s ahead of the video (declared -1.5): "auto" finds it
+    within 3 SD, and a declared -1.2 s is warned about in one line."""
+    import json
+    import shutil
+    import warnings
+
+    from armtrack_cli import pipeline
+
+    from .conftest import REPO
+
+    s = tmp_path / "s"
+    shutil.copytree(REPO / "sample_sessions" / "circle-01", s)
+    toml = s / "session.toml"
+    toml.write_text(toml.read_text().replace("groundtruth_offset_s = -1.5",
+                                             'groundtruth_offset_s = "auto"'))
+    r = pipeline.run(s, through="compare")
+    off = r["results"]["compare"]["groundtruth_offset_s"]
+    assert off["from"] == "auto" and abs(off["value"] + 1.5) < 3 * off["sd"] and off["sd"] < 0.03
+    meta = json.loads((s / "armtrack" / "errors.meta.json").read_text())
+    assert meta["settings"]["groundtruth_offset_s"]["value"] == off["value"]
+    toml.write_text(toml.read_text().replace('groundtruth_offset_s = "auto"',
+                                             "groundtruth_offset_s = -1.2"))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        pipeline.compare(s)
+    assert [str(w.message) for w in seen if "not the declared -1.200 s" in str(w.message)]

@@ -41,17 +41,18 @@ def _cost(delta, t, est, truth_t, truth_xyz, rate_hz, n_est):
 
 
 def estimate_offset(t: np.ndarray, est: np.ndarray, truth_t: np.ndarray, truth_xyz: np.ndarray,
-                    rate_hz: float, *, search_s: float = 2.0) -> Offset | None:
+                    rate_hz: float, *, search_s: float = 2.0, centre_s: float = 0.0
+                    ) -> Offset | None:
     """t (n,) s on the session clock, est (n, 3) m (NaN = missing); truth_t (m,) s on the
-    truth's own clock, truth_xyz (m, 3) m in W. None when no offset in ±search_s gives the
-    overlap needed."""
+    truth's own clock, truth_xyz (m, 3) m in W. None when no offset in centre_s ± search_s
+    gives the overlap needed."""
     from scipy.optimize import minimize_scalar
 
     n_est = int(np.isfinite(est).all(axis=1).sum())
     if n_est < 10:
         return None
     step = 1.0 / rate_hz
-    grid = np.arange(-search_s, search_s + step / 2, step)
+    grid = centre_s + np.arange(-search_s, search_s + step / 2, step)
     costs = np.array([_cost(d, t, est, truth_t, truth_xyz, rate_hz, n_est) for d in grid])
     if not np.isfinite(costs).any():
         return None

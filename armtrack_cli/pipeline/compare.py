@@ -2,23 +2,65 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
-from armtrack_cli.compare.score import JOINTS, score, truth_markers
+from armtrack_cli.compare.score import JOINTS, Truth, score, truth_markers
+from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.methods import METHODS
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
 from armtrack_cli.pipeline.palm import compare_palm
-from armtrack_cli.session.config import load_session, require
+from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.tables import read_kinematics, read_trajectory
 from armtrack_cli.session.workfolder import WorkFolder
+
+AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
+CHECK_SEARCH_S = 1.0  # a declared offset is checked within ±1 s of itself
+
+
+def synchronised_truth(session: Session, work: WorkFolder, methods) -> tuple[Truth, dict]:
+    """The truth on the session clock, and how its offset was set: declared (and checked
+    against the data: a disagreement beyond 3 SD is a one-line warning) or "auto" (estimated
+    from the trajectory of the best method present)."""
+    gt = session.groundtruth
+    declared = gt is not None and session.sync.groundtruth_offset_s != "auto"
+    raw = read_truth(session, offset_s=0.0)
+    ref = next((m for m in SYNC_PREFERENCE if m in methods), methods[0])
+    traj = read_trajectory(work / f"trajectory-{ref}.csv")
+    joint = "wrist" if "wrist" in raw.xyz else next(iter(raw.xyz))
+    est = traj[[f"{joint}_x", f"{joint}_y", f"{joint}_z"]].to_numpy() if f"{joint}_x" in traj \
+        else None
+    centre = session.offset_s("groundtruth_offset_s") if declared else 0.0
+    off = None if est is None else estimate_offset(
+        traj["t"].to_numpy(), est, raw.t, raw.xyz[joint], raw.rate_hz,
+        search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S, centre_s=centre)
+    if not declared:
+        if off is None:
+            raise DataError(gt.file, f"its clock offset cannot be estimated: within ±{AUTO_SEARCH_S:g}"
+                            f" s it never overlaps trajectory-{ref}.csv enough",
+                            "declare [sync] groundtruth_offset_s in seconds")
+        info = {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4), "from": "auto",
+                "estimated_with": ref}
+        return Truth(raw.t + off.estimate_s, raw.xyz, raw.rate_hz), info
+    info = {"value": centre, "from": "declared"}
+    if off is not None:
+        info.update(estimate=round(off.estimate_s, 4), sd=round(off.sd_s, 4), estimated_with=ref)
+        if abs(off.estimate_s - centre) > 3 * off.sd_s + 0.5 / raw.rate_hz:
+            warnings.warn(f"{gt.file}: the data put its clock offset at {off.estimate_s:+.3f} ± "
+                          f"{off.sd_s:.3f} s, not the declared {centre:+.3f} s; check [sync] "
+                          "groundtruth_offset_s", stacklevel=1)
+    return Truth(raw.t + centre, raw.xyz, raw.rate_hz), info
+
+
+SYNC_PREFERENCE = ("pf-constraint", "ukf", "pf", "ekf", "inertial")
 
 
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
@@ -31,7 +73,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    truth = read_truth(session)
+    truth, offset = synchronised_truth(session, work, methods)
     rows, mrows, excluded = [], [], {}
     for m in methods:
         traj = read_trajectory(work / f"trajectory-{m}.csv")
@@ -51,11 +93,13 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
         excluded.update(s.excluded)
     with output_set():
         write_table(work / "errors.csv", pd.DataFrame(rows, columns=list(COLUMNS)),
-                    command="compare", settings={"methods": list(methods), "excluded_frames": excluded})
+                    command="compare", settings={"methods": list(methods), "excluded_frames": excluded,
+                                                 "groundtruth_offset_s": offset})
         write_table(work / "measures.csv", pd.DataFrame(mrows), command="compare",
                     settings={"methods": list(methods)})
     text = table_one(rows, "wrist") + ("\n\n" + table_one(rows, "elbow")
                                        if any(r["joint"] == "elbow" for r in rows) else "")
     return {"errors": str(work / "errors.csv"), "measures": str(work / "measures.csv"),
             "methods": list(methods), "excluded_frames": excluded, "table": text,
+            "groundtruth_offset_s": offset,
             "rows": rows}

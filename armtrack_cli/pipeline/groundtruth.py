@@ -61,12 +61,13 @@ def joint_points(session: Session, traj: MarkerTrajectories) -> dict[str, np.nda
     return out
 
 
-def read_truth(session: Session) -> Truth:
-    """The [groundtruth] joints in W, on the session clock (session time = stream + offset)."""
+def read_truth(session: Session, *, offset_s: float | None = None) -> Truth:
+    """The [groundtruth] joints in W, on the session clock (session time = stream + offset;
+    the declared offset unless ``offset_s`` is given)."""
     gt = session.groundtruth
     traj = read_markers(gt.file)
     pts = joint_points(session, traj)
-    t = traj.t + session.offset_s("groundtruth_offset_s")
+    t = traj.t + (session.offset_s("groundtruth_offset_s") if offset_s is None else offset_s)
     return Truth(t, {j: to_world(p, gt.to_world) for j, p in pts.items()},
                  traj.rate_hz)  # every named point: joints, or a palm session's markers
 
