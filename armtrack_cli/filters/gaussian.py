@@ -6,7 +6,8 @@ Functions f, h take time-first arrays (..., n) so the UKF pushes all sigma point
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -50,24 +51,40 @@ def ekf_update(s: Gaussian, z: np.ndarray | None, h, H_jac, R: np.ndarray) -> Ga
 
 @dataclass(frozen=True)
 class SigmaPoints:
-    """Van der Merwe's scaled sigma points (Wan & van der Merwe 2000)."""
+    """Van der Merwe's scaled sigma points (Wan & van der Merwe 2000); the weights Wm, Wc are
+    computed once, when the set is made."""
 
     n: int
+    _: KW_ONLY
     alpha: float = 0.5
     beta: float = 2.0
     kappa: float = 0.0
 
     @property
     def lam(self) -> float:
+        """λ = α² (n + κ) − n."""
         return self.alpha**2 * (self.n + self.kappa) - self.n
 
-    def weights(self) -> tuple[np.ndarray, np.ndarray]:
+    @cached_property
+    def _weights(self) -> tuple[np.ndarray, np.ndarray]:
         c = 0.5 / (self.n + self.lam)
-        Wm = np.full(2 * self.n + 1, c)
+        Wm = np.full(2 * self.n + 1, c)  # Wm_i = Wc_i = 1 / 2(n + λ), i ≥ 1
         Wc = Wm.copy()
-        Wm[0] = self.lam / (self.n + self.lam)
-        Wc[0] = Wm[0] + 1 - self.alpha**2 + self.beta
+        Wm[0] = self.lam / (self.n + self.lam)  # Wm_0 = λ / (n + λ)
+        Wc[0] = Wm[0] + 1 - self.alpha**2 + self.beta  # Wc_0 = Wm_0 + 1 − α² + β
+        Wm.flags.writeable = Wc.flags.writeable = False
         return Wm, Wc
+
+    @property
+    def Wm(self) -> np.ndarray:
+        return self._weights[0]
+
+    @property
+    def Wc(self) -> np.ndarray:
+        return self._weights[1]
+
+    def weights(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._weights
 
     def points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """(2n+1, n): x, x ± columns of √((n+λ) P)."""
