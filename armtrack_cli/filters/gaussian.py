@@ -121,18 +121,27 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray, b: np.ndarray,
                Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
-    x (K, n), P (K, n, n): filtered means and covariances; F (K, n, n), b (K, n), Q (K, n, n):
-    the step into k (x_k = F_k x_{k-1} + b_k + w, w ~ N(0, Q_k); index 0 unused).
-    C_k = P_k F_{k+1}ᵀ P⁻_{k+1}⁻¹, x^s_k = x_k + C_k (x^s_{k+1} − x⁻_{k+1}),
-    P^s_k = P_k + C_k (P^s_{k+1} − P⁻_{k+1}) C_kᵀ (Rauch, Tung & Striebel 1965).
+    x (n_steps, n), P (n_steps, n, n): filtered means and covariances; F (n_steps, n, n),
+    b (n_steps, n), Q (n_steps, n, n): the step into k (x_k = F_k x_{k-1} + b_k + w,
+    w ~ N(0, Q_k); index 0 unused). The predictions and gains depend only on filtered values,
+    so they are computed for every step at once:
+    x⁻_{k+1} = F_{k+1} x_k + b_{k+1}, P⁻_{k+1} = F_{k+1} P_k F_{k+1}ᵀ + Q_{k+1},
+    gain_k = P_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹; then backwards
+    x^s_k = x_k + gain_k (x^s_{k+1} − x⁻_{k+1}),
+    P^s_k = P_k + gain_k (P^s_{k+1} − P⁻_{k+1}) gain_kᵀ (Rauch, Tung & Striebel 1965).
     """
     xs, Ps = x.copy(), P.copy()
+    if x.shape[0] < 2:
+        return xs, Ps
+    Fn = F[1:]
+    FnT = np.swapaxes(Fn, 1, 2)
+    xp = np.einsum("kij,kj->ki", Fn, x[:-1]) + b[1:]
+    Pp = Fn @ P[:-1] @ FnT + Q[1:]
+    gain = np.swapaxes(np.linalg.solve(np.swapaxes(Pp, 1, 2),
+                                       np.swapaxes(P[:-1] @ FnT, 1, 2)), 1, 2)
+    gainT = np.swapaxes(gain, 1, 2)
     for k in range(x.shape[0] - 2, -1, -1):
-        Fk = F[k + 1]
-        xp = Fk @ x[k] + b[k + 1]
-        Pp = Fk @ P[k] @ Fk.T + Q[k + 1]
-        C = np.linalg.solve(Pp.T, (P[k] @ Fk.T).T).T
-        xs[k] = x[k] + C @ (xs[k + 1] - xp)
-        Pk = P[k] + C @ (Ps[k + 1] - Pp) @ C.T
+        xs[k] = x[k] + gain[k] @ (xs[k + 1] - xp[k])
+        Pk = P[k] + gain[k] @ (Ps[k + 1] - Pp[k]) @ gainT[k]
         Ps[k] = 0.5 * (Pk + Pk.T)
     return xs, Ps

@@ -198,10 +198,7 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimat
     (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
     through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
     to the process noise of each step."""
-    K = est.mean.shape[0]
-    F = np.stack([inp.steps.F(k) for k in range(K)])
-    b = np.stack([inp.steps.b(k) for k in range(K)])
-    Q = np.stack([inp.steps.Q(k) for k in range(K)])
+    F, b, Q = inp.steps.stacked()
     if method == "pf-constraint":
         Q = Q + np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2)
     Q += 1e-12 * np.eye(6)

@@ -49,6 +49,25 @@ class Steps:
         blk = self.q * np.array([[d**3 / 3, d**2 / 2], [d**2 / 2, d]])
         return np.kron(blk, np.eye(3))
 
+    def stacked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """F (n_frames, 6, 6), b (n_frames, 6), Q (n_frames, 6, 6): F(k), b(k), Q(k) for every
+        frame at once (the same arithmetic, so the same numbers)."""
+        d = self.dt
+        n_frames = d.size
+        F = np.tile(np.eye(6), (n_frames, 1, 1))
+        idx = np.arange(3)
+        F[:, idx, 3 + idx] = d[:, None]
+        b = np.hstack([self.dp, self.dv])
+        # Δ³ and Δ² by C's pow per element, as the scalar Δ**3 of Q(k) (numpy's array power
+        # rounds differently)
+        d3 = np.fromiter((v**3 for v in d.tolist()), float, n_frames)
+        d2 = np.fromiter((v**2 for v in d.tolist()), float, n_frames)
+        Q = np.zeros((n_frames, 6, 6))
+        for (r, c), v in (((0, 0), self.q * (d3 / 3)), ((0, 3), self.q * (d2 / 2)),
+                          ((3, 0), self.q * (d2 / 2)), ((3, 3), self.q * d)):
+            Q[:, r + idx, c + idx] = v[:, None]
+        return F, b, Q
+
     def noise_factors(self) -> np.ndarray:
         """(K, 3) rows (a, c, e) with Q = L Lᵀ ⊗ I₃, L = [[a, 0], [c, e]]: the closed-form
         Cholesky factor of q [[Δ³/3, Δ²/2], [Δ²/2, Δ]], so position noise is a·ε₁ and velocity
@@ -67,7 +86,7 @@ class Steps:
         return out
 
 
-def composite_steps(t_imu: np.ndarray, a_W: np.ndarray, t_frames: np.ndarray,
+def composite_steps(t_imu: np.ndarray, a_W: np.ndarray, t_frames: np.ndarray, *,
                     accel_noise: float, imu_period: float) -> Steps:
     """Integrate the held accelerations a_W (M, 3) at t_imu over each frame interval.
 
@@ -141,7 +160,7 @@ class Projection:
         return d / np.linalg.norm(d)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Arm:
     """Tao & Hu's arm: fixed shoulder S, upper arm L1, forearm L2 along the IMU's forearm axis."""
 

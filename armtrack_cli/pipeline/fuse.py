@@ -84,13 +84,14 @@ def prepare(session: Session, dest: Path, s: FuseSettings):
     first = int(np.flatnonzero(det)[0])
     last = int(np.flatnonzero(inside)[-1])
     frames = np.arange(first, last + 1)
-    steps = models.composite_steps(t_imu, a_w, t_f[frames], s.accel_noise, 1.0 / imu.rate_hz)
+    steps = models.composite_steps(t_imu, a_w, t_f[frames], accel_noise=s.accel_noise,
+                                   imu_period=1.0 / imu.rate_hz)
     q_f = quat.interpolate(t_imu, q_imu, t_f[frames])
     proj = models.Projection(cam)
     arm = None
     if session.arm is not None:
-        arm = models.Arm(session.arm.shoulder_m, session.arm.upper_arm_m, session.arm.forearm_m,
-                         session.imu.forearm_unit)
+        arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
+                         L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
     return t_f, frames, Inputs(steps, uv[frames], q_f), proj, arm
 
 
