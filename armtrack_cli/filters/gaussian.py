@@ -18,10 +18,11 @@ class Gaussian:
     P: np.ndarray  # (n, n)
 
 
-def _joseph(P, K, H, R):
-    """Joseph form (I − KH) P (I − KH)ᵀ + K R Kᵀ: symmetric and positive whatever K is."""
-    I_KH = np.eye(P.shape[0]) - K @ H
-    return I_KH @ P @ I_KH.T + K @ R @ K.T
+def _joseph(P, gain, H, R):
+    """Joseph form (I − gain H) P (I − gain H)ᵀ + gain R gainᵀ: symmetric and positive
+    whatever the gain is."""
+    I_KH = np.eye(P.shape[0]) - gain @ H
+    return I_KH @ P @ I_KH.T + gain @ R @ gain.T
 
 
 def kf_predict(s: Gaussian, F: np.ndarray, Q: np.ndarray, b: np.ndarray | None = None) -> Gaussian:
@@ -31,12 +32,12 @@ def kf_predict(s: Gaussian, F: np.ndarray, Q: np.ndarray, b: np.ndarray | None =
 
 
 def kf_update(s: Gaussian, z: np.ndarray | None, H: np.ndarray, R: np.ndarray) -> Gaussian:
-    """K = P Hᵀ (H P Hᵀ + R)⁻¹; x = x + K (z − H x)."""
+    """gain = P Hᵀ (H P Hᵀ + R)⁻¹; x = x + gain (z − H x)."""
     if z is None:
         return s
     S = H @ s.P @ H.T + R
-    K = np.linalg.solve(S.T, (s.P @ H.T).T).T
-    return Gaussian(s.x + K @ (z - H @ s.x), _joseph(s.P, K, H, R))
+    gain = np.linalg.solve(S.T, (s.P @ H.T).T).T
+    return Gaussian(s.x + gain @ (z - H @ s.x), _joseph(s.P, gain, H, R))
 
 
 def ekf_update(s: Gaussian, z: np.ndarray | None, h, H_jac, R: np.ndarray) -> Gaussian:
@@ -45,8 +46,8 @@ def ekf_update(s: Gaussian, z: np.ndarray | None, h, H_jac, R: np.ndarray) -> Ga
         return s
     H = H_jac(s.x)
     S = H @ s.P @ H.T + R
-    K = np.linalg.solve(S.T, (s.P @ H.T).T).T
-    return Gaussian(s.x + K @ (z - h(s.x)), _joseph(s.P, K, H, R))
+    gain = np.linalg.solve(S.T, (s.P @ H.T).T).T
+    return Gaussian(s.x + gain @ (z - h(s.x)), _joseph(s.P, gain, H, R))
 
 
 @dataclass(frozen=True)
@@ -102,7 +103,7 @@ def ukf_predict(s: Gaussian, f, Q: np.ndarray, sp: SigmaPoints) -> Gaussian:
 
 
 def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoints) -> Gaussian:
-    """Measurement sigma points Z = h(X); K = P_xz P_zz⁻¹."""
+    """Measurement sigma points Z = h(X); gain = P_xz P_zz⁻¹."""
     if z is None:
         return s
     Wm, Wc = sp.weights()
@@ -112,9 +113,9 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
     dz, dx = Z - zm, X - s.x
     Pzz = (Wc[:, None] * dz).T @ dz + R
     Pxz = (Wc[:, None] * dx).T @ dz
-    K = np.linalg.solve(Pzz.T, Pxz.T).T
-    P = s.P - K @ Pzz @ K.T
-    return Gaussian(s.x + K @ (z - zm), 0.5 * (P + P.T))
+    gain = np.linalg.solve(Pzz.T, Pxz.T).T
+    P = s.P - gain @ Pzz @ gain.T
+    return Gaussian(s.x + gain @ (z - zm), 0.5 * (P + P.T))
 
 
 def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray, b: np.ndarray,

@@ -21,15 +21,15 @@ class Inputs:
     orientation at the frame time."""
 
     steps: Steps
-    z: np.ndarray  # (K, 2) px, NaN where the patch was not detected
-    q_WB: np.ndarray  # (K, 4)
+    z: np.ndarray  # (n_frames, 2) px, NaN where the patch was not detected
+    q_WB: np.ndarray  # (n_frames, 4)
 
 
 @dataclass(frozen=True)
 class Estimates:
-    mean: np.ndarray  # (K, 6) wrist position and velocity
-    cov: np.ndarray  # (K, 6, 6)
-    ess: np.ndarray | None  # (K,) particle filters only
+    mean: np.ndarray  # (n_frames, 6) wrist position and velocity
+    cov: np.ndarray  # (n_frames, 6, 6)
+    ess: np.ndarray | None  # (n_frames,) particle filters only
 
     @property
     def sd(self) -> np.ndarray:
