@@ -138,11 +138,13 @@ def stage(code: str) -> tuple[float, float]:
     """Wall seconds and peak memory (max RSS, MB) of one pipeline call in its own process."""
     import subprocess
 
-    prog = ("import resource, sys, time; from armtrack_cli import pipeline; "
+    # VmHWM: this process's peak resident memory (ru_maxrss would carry the parent's peak
+    # across the exec)
+    prog = ("import re, sys, time; from armtrack_cli import pipeline; "
             "from armtrack_cli.session.video import iter_frames, probe_video; "
             "from armtrack_cli.simulate.arm_session import ArmSimSettings; "
-            "t = time.perf_counter(); " + code + "; print(time.perf_counter() - t, "
-            "resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)")
+            "t = time.perf_counter(); " + code + "; print(time.perf_counter() - t, int(re.search("
+            "r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read()).group(1)) / 1024)")
     r = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True, check=True,
                        cwd=REPO, env=_ENV)
     sec, mb = (float(v) for v in r.stdout.split()[-2:])

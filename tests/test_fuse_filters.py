@@ -79,11 +79,13 @@ def test_run_gaussian_is_the_kalman_filter_on_a_linear_model(method):
     np.testing.assert_allclose(est.cov, P_ref, rtol=0, atol=1e-12)
 
 
-def test_rts_smooth_is_the_textbook_smoother():
-    """RTS written here step by step with explicit inverses (Rauch, Tung & Striebel 1965)."""
+@pytest.mark.parametrize("block", [7, 4096])
+def test_rts_smooth_is_the_textbook_smoother(block):
+    """RTS written here step by step with explicit inverses (Rauch, Tung & Striebel 1965);
+    the gains computed in blocks of 7 steps or all at once."""
     inp, x0, P0, (F, b, Q) = _problem(n_frames=60)
     x, P = _textbook(inp, x0, P0, (F, b, Q), 16.0 * np.eye(2))
-    xs, Ps = gaussian.rts_smooth(x, P, F, b, Q)
+    xs, Ps = gaussian.rts_smooth(x, P, F, b, Q, block=block)
     x_ref, P_ref = x.copy(), P.copy()
     for k in range(x.shape[0] - 2, -1, -1):
         Pp = F[k + 1] @ P[k] @ F[k + 1].T + Q[k + 1]
@@ -204,3 +206,10 @@ def test_one_step_equals_filterpy():
     np.testing.assert_allclose(ours.x, ukf.x, rtol=1e-12)
     np.testing.assert_allclose(ours.P, ukf.P, rtol=0, atol=1e-12 * np.abs(ukf.P).max())
 
+
+
+@pytest.mark.parametrize("method", ["inertial", "ekf", "ukf", "pf", "pf-constraint"])
+def test_kernels_load_before_a_timed_run(method):
+    from armtrack_cli.fuse.methods import load_kernels
+
+    load_kernels(method)  # runs on a two-frame problem without error

@@ -119,30 +119,30 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
 
 
 def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray, b: np.ndarray,
-               Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+               Q: np.ndarray, *, block: int = 4096) -> tuple[np.ndarray, np.ndarray]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
     x (n_steps, n), P (n_steps, n, n): filtered means and covariances; F (n_steps, n, n),
     b (n_steps, n), Q (n_steps, n, n): the step into k (x_k = F_k x_{k-1} + b_k + w,
     w ~ N(0, Q_k); index 0 unused). The predictions and gains depend only on filtered values,
-    so they are computed for every step at once:
+    so they are computed for ``block`` steps at once (memory stays flat with the length):
     x⁻_{k+1} = F_{k+1} x_k + b_{k+1}, P⁻_{k+1} = F_{k+1} P_k F_{k+1}ᵀ + Q_{k+1},
     gain_k = P_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹; then backwards
     x^s_k = x_k + gain_k (x^s_{k+1} − x⁻_{k+1}),
     P^s_k = P_k + gain_k (P^s_{k+1} − P⁻_{k+1}) gain_kᵀ (Rauch, Tung & Striebel 1965).
     """
     xs, Ps = x.copy(), P.copy()
-    if x.shape[0] < 2:
-        return xs, Ps
-    Fn = F[1:]
-    FnT = np.swapaxes(Fn, 1, 2)
-    xp = np.einsum("kij,kj->ki", Fn, x[:-1]) + b[1:]
-    Pp = Fn @ P[:-1] @ FnT + Q[1:]
-    gain = np.swapaxes(np.linalg.solve(np.swapaxes(Pp, 1, 2),
-                                       np.swapaxes(P[:-1] @ FnT, 1, 2)), 1, 2)
-    gainT = np.swapaxes(gain, 1, 2)
-    for k in range(x.shape[0] - 2, -1, -1):
-        xs[k] = x[k] + gain[k] @ (xs[k + 1] - xp[k])
-        Pk = P[k] + gain[k] @ (Ps[k + 1] - Pp[k]) @ gainT[k]
-        Ps[k] = 0.5 * (Pk + Pk.T)
+    for stop in range(x.shape[0] - 1, 0, -block):  # steps k in [start, stop), backwards
+        start = max(0, stop - block)
+        Fn = F[start + 1:stop + 1]
+        FnT = np.swapaxes(Fn, 1, 2)
+        xp = np.einsum("kij,kj->ki", Fn, x[start:stop]) + b[start + 1:stop + 1]
+        Pp = Fn @ P[start:stop] @ FnT + Q[start + 1:stop + 1]
+        gain = np.swapaxes(np.linalg.solve(np.swapaxes(Pp, 1, 2),
+                                           np.swapaxes(P[start:stop] @ FnT, 1, 2)), 1, 2)
+        for j in range(stop - start - 1, -1, -1):
+            k = start + j
+            xs[k] = x[k] + gain[j] @ (xs[k + 1] - xp[j])
+            Pk = P[k] + gain[j] @ (Ps[k + 1] - Pp[j]) @ gain[j].T
+            Ps[k] = 0.5 * (Pk + Pk.T)
     return xs, Ps
