@@ -68,37 +68,6 @@ def gaussian_vs_filterpy(inp: Inputs, proj, x0, P0, s) -> list[tuple]:
                 f.update(zs[k])
         return f.x
 
-    def step_diff(kind: str) -> float:
-        """Largest difference of one predict + update started from the same prior (FilterPy's
-        state at every step): the maths compared without the drift of a long run."""
-        if kind == "EKF":
-            f = ExtendedKalmanFilter(6, 2)
-        else:
-            pts = MerweScaledSigmaPoints(6, alpha=0.5, beta=2.0, kappa=0.0)
-            f = UnscentedKalmanFilter(6, 2, dt=1.0, hx=hx, fx=lambda x, dt: x, points=pts)
-        f.x, f.P, f.R = x0.copy(), P0.copy(), R
-        worst = 0.0
-        for k in range(1, n_frames):
-            prior = gaussian.Gaussian(f.x.copy(), f.P.copy())
-            if kind == "EKF":
-                f.F, f.Q, f.B = inp.steps.F(k), inp.steps.Q(k), np.eye(6)
-                f.predict(u=inp.steps.b(k))
-                if zs[k] is not None:
-                    f.update(zs[k], Hj, hx)
-                st = gaussian.ekf_update(gaussian.kf_predict(prior, inp.steps.F(k), inp.steps.Q(k),
-                                               inp.steps.b(k)), zs[k], hx, Hj, R)
-            else:
-                f.Q = inp.steps.Q(k)
-                f.predict(fx=lambda x, dt, k=k: inp.steps.apply(k, x))
-                if zs[k] is not None:
-                    f.sigmas_f = pts.sigma_points(f.x, f.P)
-                    f.update(zs[k])
-                st = gaussian.ukf_update(gaussian.ukf_predict(prior, lambda X, k=k: inp.steps.apply(k, X),
-                                                inp.steps.Q(k), sp),
-                                  zs[k], lambda X: proj(X[:, :3]), R, sp)
-            worst = max(worst, float(np.abs(st.x - f.x).max()))
-        return worst
-
     rows = []
     for name, ours, theirs in (("EKF", ours_ekf, fp_ekf), ("UKF", ours_ukf, fp_ukf)):
         diff = float(np.abs(ours() - theirs()).max())
@@ -109,8 +78,45 @@ def gaussian_vs_filterpy(inp: Inputs, proj, x0, P0, s) -> list[tuple]:
         t_c, t_o, t_f = best_of(compiled, runs=7), best_of(ours), best_of(theirs)
         n = n_frames - 1
         rows.append((name, n, t_c / n * 1e6, t_o / n * 1e6, t_f / n * 1e6, t_f / t_c,
-                     step_diff(name), diff))
+                     step_diff(name, inp, proj, x0, P0, R, sp), diff))
     return rows
+
+
+def step_diff(kind: str, inp: Inputs, proj, x0, P0, R, sp) -> float:
+    """Largest difference of one predict + update started from the same prior (FilterPy's
+    state at every step): the maths compared without the drift of a long run."""
+    from filterpy.kalman import ExtendedKalmanFilter, MerweScaledSigmaPoints, UnscentedKalmanFilter
+
+    zs = [None if np.isnan(z).any() else z for z in inp.z]
+    Hj = lambda x: np.hstack([proj.jacobian(x[:3]), np.zeros((2, 3))])  # noqa: E731
+    hx = lambda x: proj(x[:3])  # noqa: E731
+    if kind == "EKF":
+        f = ExtendedKalmanFilter(6, 2)
+    else:
+        pts = MerweScaledSigmaPoints(6, alpha=0.5, beta=2.0, kappa=0.0)
+        f = UnscentedKalmanFilter(6, 2, dt=1.0, hx=hx, fx=lambda x, dt: x, points=pts)
+    f.x, f.P, f.R = x0.copy(), P0.copy(), R
+    worst = 0.0
+    for k in range(1, inp.z.shape[0]):
+        prior = gaussian.Gaussian(f.x.copy(), f.P.copy())
+        if kind == "EKF":
+            f.F, f.Q, f.B = inp.steps.F(k), inp.steps.Q(k), np.eye(6)
+            f.predict(u=inp.steps.b(k))
+            if zs[k] is not None:
+                f.update(zs[k], Hj, hx)
+            st = gaussian.ekf_update(gaussian.kf_predict(prior, inp.steps.F(k), inp.steps.Q(k),
+                                           inp.steps.b(k)), zs[k], hx, Hj, R)
+        else:
+            f.Q = inp.steps.Q(k)
+            f.predict(fx=lambda x, dt, k=k: inp.steps.apply(k, x))
+            if zs[k] is not None:
+                f.sigmas_f = pts.sigma_points(f.x, f.P)
+                f.update(zs[k])
+            st = gaussian.ukf_update(gaussian.ukf_predict(prior, lambda X, k=k: inp.steps.apply(k, X),
+                                            inp.steps.Q(k), sp),
+                              zs[k], lambda X: proj(X[:, :3]), R, sp)
+        worst = max(worst, float(np.abs(st.x - f.x).max()))
+    return worst
 
 
 def pf_vs_reference(inp: Inputs, proj, arm, x0, P0, s, sizes=(500, 5000, 50000)) -> list[tuple]:
