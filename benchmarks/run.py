@@ -56,9 +56,9 @@ def detection_rows(tmp: str) -> list[tuple]:
         folder = SAMPLES / name
         video = probe_video(load_session(folder).camera.video)
         n = video.n_frames
-        dec = wall(lambda v=video: sum(1 for _ in iter_frames(v)), 5)
-        dec2 = wall(lambda v=video: sum(1 for _ in iter_frames_ahead(v)), 5)
-        det = wall(lambda f=folder, n=name: pipeline.detect(f, out=os.path.join(tmp, n)), 5)
+        dec = wall(lambda v=video: sum(1 for _ in iter_frames(v)), 3)
+        dec2 = wall(lambda v=video: sum(1 for _ in iter_frames_ahead(v)), 3)
+        det = wall(lambda f=folder, n=name: pipeline.detect(f, out=os.path.join(tmp, n)), 3)
         kind = "palm blobs" if name.startswith("wrist") else "wrist patch (CamShift)"
         rows.append((f"decode only, {name}", n, dec, dec, ""))
         rows.append((f"decode on a second thread, {name}", n, dec2, dec, ""))
@@ -135,8 +135,9 @@ def user_rows(folder, out) -> list[tuple]:
     return rows
 
 
-def stage(code: str) -> tuple[float, float]:
-    """Wall seconds and peak memory (max RSS, MB) of one pipeline call in its own process."""
+def stage(code: str) -> tuple[float, float, str]:
+    """Wall seconds and peak memory (MB) of one pipeline call in its own process, and its
+    error's last line if it failed."""
     import subprocess
 
     # VmHWM: this process's peak resident memory (ru_maxrss would carry the parent's peak
@@ -146,10 +147,14 @@ def stage(code: str) -> tuple[float, float]:
             "from armtrack_cli.simulate.arm_session import ArmSimSettings; "
             "t = time.perf_counter(); " + code + "; print(time.perf_counter() - t, int(re.search("
             "r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read()).group(1)) / 1024)")
-    r = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True, check=True,
+    r = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True,
                        cwd=REPO, env=_ENV)
+    if r.returncode:  # reported in the table, not fatal
+        last = (r.stderr.strip().splitlines() or ["?"])[-1]
+        print(f"stage failed: {code}\n{r.stderr}", file=sys.stderr)
+        return float("nan"), float("nan"), last
     sec, mb = (float(v) for v in r.stdout.split()[-2:])
-    return sec, mb
+    return sec, mb, ""
 
 
 def end_to_end(tmp: str, minutes: float) -> list[tuple]:
