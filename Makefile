@@ -1,31 +1,29 @@
 # armtrack: `make demo` and `make test` set everything up on a fresh machine.
+# Both install the exact versions the suite passed with (requirements.lock, made by `make lock`);
+# pyproject.toml keeps compatible ranges for people who `pip install` armtrack elsewhere.
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
+LOCK := requirements.lock
 DEMO := sample_sessions/circle-01
 DEMO_OUT := demo-out
 
-.PHONY: setup demo test lint bench validate docs samples clean
+.PHONY: setup demo test test-latest lock lint bench validate docs samples clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml $(LOCK)
 	$(PY) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -c $(LOCK) pip setuptools wheel
+	$(BIN)/python -m pip install --quiet --no-build-isolation -c $(LOCK) -e '.[dev]'
 	touch $(STAMP)
 
 setup: $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/armtrack info $(DEMO)
-	$(BIN)/armtrack calibrate $(DEMO) --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack detect $(DEMO) --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack fuse $(DEMO) --method ekf --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack fuse $(DEMO) --method pf-constraint --out $(DEMO_OUT)/circle-01
-	$(BIN)/armtrack compare $(DEMO) --out $(DEMO_OUT)/circle-01
+	$(BIN)/armtrack run $(DEMO) --method ekf --method pf-constraint --out $(DEMO_OUT)/circle-01
 	$(BIN)/armtrack info sample_sessions/wrist-rom-01
-	$(BIN)/armtrack calibrate sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01
-	$(BIN)/armtrack detect sample_sessions/wrist-rom-01 --out $(DEMO_OUT)/wrist-rom-01
+	$(BIN)/armtrack run sample_sessions/reach-01 sample_sessions/wrist-rom-01 --out $(DEMO_OUT)
 	@echo "demo: outputs in $(DEMO_OUT)/"
 
 samples: $(STAMP)
@@ -37,6 +35,22 @@ samples: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q -p no:cacheprovider
 
+# The suite against the newest versions pyproject.toml allows, in a venv of its own.
+test-latest:
+	rm -rf .venv-latest
+	$(PY) -m venv .venv-latest
+	.venv-latest/bin/python -m pip install --quiet --upgrade pip setuptools wheel
+	.venv-latest/bin/python -m pip install --quiet --no-build-isolation -e '.[dev]'
+	.venv-latest/bin/python -m pytest -q -p no:cacheprovider
+
+# Regenerate the lock: the newest allowed versions, written only if the suite passes with them.
+lock: test-latest
+	{ echo "# Exact versions the test suite passed with (Python $$(.venv-latest/bin/python -c \
+	'import platform; print(platform.python_version())'), $$(date -u +%Y-%m-%d)); made by \`make lock\`."; \
+	  .venv-latest/bin/python -m pip freeze --all --exclude-editable | LC_ALL=C sort -f; } > $(LOCK).tmp
+	mv $(LOCK).tmp $(LOCK)
+	rm -rf .venv-latest
+
 lint: $(STAMP)
 	$(BIN)/ruff check armtrack_cli tests
 
@@ -44,10 +58,11 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 
 validate: $(STAMP)
+	ARMTRACK_FUZZ_EXAMPLES=2000 $(BIN)/python -m pytest -q -p no:cacheprovider tests/test_fuzz_readers.py
 	$(BIN)/python validation/run.py
 
 docs: $(STAMP)
 	$(BIN)/python -c "from armtrack_cli.cli import render_reference as r; open('docs/cli.md','w').write(r())"
 
 clean:
-	rm -rf $(VENV) $(DEMO_OUT) *.egg-info
+	rm -rf $(VENV) .venv-latest $(DEMO_OUT) *.egg-info

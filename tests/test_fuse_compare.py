@@ -25,11 +25,9 @@ def sessions(tmp_path_factory):
                                                 occlusions=((4.0, 0.5), (7.5, 0.5)),
                                                 distractor=True, drop_rate=0.02, gt_gaps=2)}.items():
         pipeline.simulate(root / name, st)
-        pipeline.calibrate(root / name)
-        pipeline.detect(root / name)
-        for m in METHODS:
-            r = run_cli("fuse", root / name, "--method", m, "--seed", "1")
-            assert r.exit_code == 0, r.stderr
+        r = pipeline.run(root / name, through="fuse", methods=METHODS, seed=1)
+        assert r["stages"] == {"calibrate": "ran", "detect": "ran",
+                               **{f"fuse {m}": "ran" for m in METHODS}}
         made[name] = (root / name, dict(np.load(root / f"{name}.truth.npz")))
     return made
 
@@ -62,18 +60,27 @@ def test_no_jump_and_no_flip_through_occlusions(sessions):
 
 def test_baselines_rank_as_the_paper_says(sessions):
     """Not detuned, only measured: the constraint beats every baseline by far, and dead
-    reckoning is worse than the camera-aided Gaussian filters (Tao & Hu, Table I). Our plain PF
-    can drift along the camera ray even more than dead reckoning (docs/validation.md)."""
+    reckoning is worse than the camera-aided Gaussian filters (Tao & Hu, Table I). A baseline
+    that drifts out of the arm's reach has those frames left empty (no wrist can be there), so
+    "worse" is: a 5x larger error on the frames it kept, or a tenth of the frames lost."""
     folder, truth = sessions["circle"]
-    rmse = {m: np.sqrt(np.nanmean(np.sum(_err(folder, truth, m)[0] ** 2, axis=1))) for m in METHODS}
-    assert rmse["pf-constraint"] * 5 < min(rmse["ekf"], rmse["ukf"], rmse["pf"])
-    assert rmse["inertial"] > max(rmse["ekf"], rmse["ukf"])
+    rmse, lost = {}, {}
+    for m in METHODS:
+        e, d = _err(folder, truth, m)
+        ok = np.isfinite(e).all(axis=1)
+        rmse[m] = np.sqrt(np.mean(np.sum(e[ok] ** 2, axis=1)))
+        lost[m] = 1 - ok.mean()
+    assert lost["pf-constraint"] == 0.0
+    for m in ("ekf", "ukf", "pf", "inertial"):
+        assert rmse[m] > 5 * rmse["pf-constraint"] or lost[m] > 0.10, (m, rmse[m], lost[m])
+    for m in ("ekf", "ukf"):
+        assert lost["inertial"] > lost[m] + 0.10 or rmse["inertial"] > rmse[m]
 
 
 def test_inertial_drifts_as_physics_says(sessions):
     """Dead reckoning from a start within a few cm: after t seconds the error is bounded by
     ½ t² (‖acc bias‖ + g sin θ_max + its scale), θ the IMU's orientation error (gravity leaking
-    through a tilt), and it does grow: beyond 10 cm by the end."""
+    through a tilt), and it does grow: past the arm's reach, where its frames are left empty."""
     folder, truth = sessions["circle"]
     e, d = _err(folder, truth, "inertial")
     t = d["t"].to_numpy() - d["t"].to_numpy()[0]
@@ -85,8 +92,11 @@ def test_inertial_drifts_as_physics_says(sessions):
     theta = Q.angle_between(imu.quat, truth["imu_q_true"]).max()
     a_err = np.linalg.norm(truth["acc_bias"]) + 9.81 * np.sin(theta)
     bound = 0.05 + 0.5 * a_err * t**2 * 1.5  # 1.5: the orientation error also turns motion
-    assert (err <= bound).all()
-    assert err[-1] > 0.10
+    kept = np.isfinite(err)
+    assert (err[kept] <= bound[kept]).all()
+    assert not kept[-30:].any()  # the last second is beyond reach: missing, not a number
+    meta = (folder / "armtrack" / "trajectory-inertial.meta.json").read_text()
+    assert f'"frames_beyond_reach": {int((~kept).sum())}' in meta
 
 
 def test_missing_data_is_carried_as_missing(sessions):
@@ -100,8 +110,8 @@ def test_missing_data_is_carried_as_missing(sessions):
 
 def test_same_seed_same_bytes(sessions, tmp_path):
     folder, _ = sessions["circle"]
-    run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "1", "--out", tmp_path)
-    # fuse reads camera.yaml and detections.csv from --out: copy them there first
+    r = run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "1", "--out", tmp_path)
+    assert r.exit_code == 1 and "camera.yaml: not found" in r.stderr  # --out is the work folder
     import shutil
 
     for f in ("camera.yaml", "detections.csv"):
@@ -110,7 +120,8 @@ def test_same_seed_same_bytes(sessions, tmp_path):
                    tmp_path).exit_code == 0
     a = (tmp_path / "trajectory-pf-constraint.csv").read_bytes()
     assert a == (folder / "armtrack" / "trajectory-pf-constraint.csv").read_bytes()
-    run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "2", "--out", tmp_path)
+    assert run_cli("fuse", folder, "--method", "pf-constraint", "--seed", "2", "--out",
+                   tmp_path).exit_code == 0
     assert (tmp_path / "trajectory-pf-constraint.csv").read_bytes() != a
 
 
@@ -124,18 +135,23 @@ def test_compare_writes_the_contract_table(sessions, tmp_path):
     assert tuple(errors.columns) == COLUMNS
     assert set(errors["axis"]) == {"x", "y", "z", "3d"} and set(errors["joint"]) == {"wrist", "elbow"}
     assert set(errors["method"]) == set(METHODS)
-    assert pd.read_csv(folder / "armtrack" / "measures.csv").shape[0] == 5 * 11
+    m = pd.read_csv(folder / "armtrack" / "measures.csv", dtype={"segment": str})
+    assert set(m["method"]) == set(METHODS) and {"measure", "segment", "unit", "estimate",
+                                                  "estimate_sd", "truth", "error",
+                                                  "error_pct"} <= set(m.columns)
 
 
 def test_clinical_measures_match_the_truth_on_a_circle(sessions):
-    """On the circle (1 m of path) the measures from pf-constraint agree with those from the
-    Qualisys truth: path length within 10 %, peak speed within 15 %, elbow RoM within 5°."""
+    """On the circle the measures from pf-constraint agree with those from the Qualisys
+    truth (issue 12's goals): path length within 3 %, peak speed within 5 %, elbow RoM
+    within 3°."""
     folder, _ = sessions["circle"]
     assert run_cli("compare", folder, "--method", "pf-constraint").exit_code == 0
-    m = pd.read_csv(folder / "armtrack" / "measures.csv").set_index("measure")
-    rel = lambda k: abs(m.loc[k, "difference"]) / m.loc[k, "truth"]  # noqa: E731
-    assert rel("wrist_path_length") < 0.10 and rel("wrist_peak_speed") < 0.15
-    assert abs(m.loc["elbow_flexion_rom", "difference"]) < 5.0
+    m = pd.read_csv(folder / "armtrack" / "measures.csv", dtype={"segment": str})
+    m = m[m["segment"] == "session"].set_index("measure")
+    assert abs(m.loc["wrist_path_length", "error_pct"]) <= 3.0
+    assert abs(m.loc["wrist_peak_speed", "error_pct"]) <= 5.0
+    assert abs(m.loc["elbow_flexion_rom", "error"]) <= 3.0
 
 
 def test_fuse_and_compare_errors(sessions, tmp_path):

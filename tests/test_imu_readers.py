@@ -10,8 +10,8 @@ import pytest
 
 from armtrack_cli.core import quaternion as Q
 from armtrack_cli.core.errors import ImuFileError
-from armtrack_cli.session.export_mcap import write_imu_mcap
-from armtrack_cli.session.export_xsens import write_mt_manager
+from armtrack_cli.session.export.mcap import write_imu_mcap
+from armtrack_cli.session.export.xsens import write_mt_manager
 from armtrack_cli.session.imu import read_imu
 
 from .conftest import DATA

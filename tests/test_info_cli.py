@@ -7,8 +7,8 @@ import json
 import numpy as np
 
 from armtrack_cli.cli import render_reference
-from armtrack_cli.session.export_qualisys import format_qtm_tsv
-from armtrack_cli.session.export_xsens import format_mt_manager
+from armtrack_cli.session.export.qualisys import format_qtm_tsv
+from armtrack_cli.session.export.xsens import format_mt_manager
 
 from .conftest import DATA, REPO, run_cli, write_session
 

@@ -12,8 +12,8 @@ import pytest
 from armtrack_cli.core.errors import GroundTruthError
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.session.camera_yaml import read_camera_yaml, write_camera_yaml
-from armtrack_cli.session.export_mcap import write_imu_mcap
-from armtrack_cli.session.export_qualisys import format_qtm_tsv
+from armtrack_cli.session.export.mcap import write_imu_mcap
+from armtrack_cli.session.export.qualisys import format_qtm_tsv
 from armtrack_cli.session.qualisys import read_qualisys, to_world
 from armtrack_cli.session.video import iter_frames, probe_video
 

@@ -2,8 +2,9 @@
 
 Simulated sessions (default MTw-class IMU, 640x480 camera, Qualisys 100 Hz) over several tasks
 and seeds, each run through calibrate -> detect -> fuse (every method) -> compare exactly as a
-user would, twice: with armtrack's defaults (offline RTS smoothing) and with the tao2008-*
-recipes (the paper's forward filters and settings). Errors are pooled over all frames.
+user would (`armtrack run`, then `compare`), twice: with armtrack's defaults (offline RTS
+smoothing) and with the tao2008-* recipes (the paper's forward filters and settings). Errors
+are compare's rows, pooled exactly over all frames of all sessions.
 """
 
 from __future__ import annotations
@@ -15,16 +16,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from armtrack_cli import pipeline  # noqa: E402
-from armtrack_cli.compare.errors import error_rows, table_one, truth_at  # noqa: E402
+from armtrack_cli.compare.errors import pooled, table_one  # noqa: E402
 from armtrack_cli.fuse.settings import METHODS  # noqa: E402
-from armtrack_cli.session.config import load_session  # noqa: E402
-from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world  # noqa: E402
 from armtrack_cli.simulate.arm_session import ArmSimSettings  # noqa: E402
 
 PAPER = {"inertial": "21.31/37.70, -12.41/16, 6.74/5.23", "ekf": "0.4/3.30, 10.56/9.39, 7.83/5.72",
@@ -34,13 +32,15 @@ CONFIGS = {"armtrack defaults (RTS smoothing)": None, "tao2008-* recipes (the pa
            "tao2008-{m}"}
 
 
-def truth_for(folder: Path, t: np.ndarray) -> dict[str, np.ndarray]:
-    s = load_session(folder)
-    q = read_qualisys(s.groundtruth.file)
-    cols = select_markers(q, s.groundtruth.markers, s.toml_path)
-    return {j: truth_at(t, q.t + s.sync.groundtruth_offset_s,
-                        to_world(q.xyz[:, cols[j]], s.groundtruth.to_world), q.rate_hz)
-            for j in ("wrist", "elbow")}
+def score(folder: Path, recipe: str | None, seed: int) -> tuple[list[dict], dict]:
+    """Every method on one session as a user runs it (`armtrack run`), scored by compare."""
+    out = folder / "armtrack" / ("defaults" if recipe is None else "tao2008")
+    fps = {}
+    for m in METHODS:
+        r = pipeline.run(folder, through="fuse", methods=(m,), seed=seed, out=out,
+                         recipe=recipe.format(m=m) if recipe else None)
+        fps[m] = r["results"][f"fuse {m}"]["frames_per_s"]
+    return pipeline.compare(folder, methods=METHODS, out=out)["rows"], fps
 
 
 def main() -> None:
@@ -50,7 +50,7 @@ def main() -> None:
     ap.add_argument("--out", default=str(REPO / "docs" / "validation.md"))
     args = ap.parse_args()
     tasks, seeds = ("circle", "rectangle", "reach"), tuple(range(args.seeds))
-    pooled = {c: {m: {"wrist": ([], []), "elbow": ([], [])} for m in METHODS} for c in CONFIGS}
+    rows = {c: [] for c in CONFIGS}
     per_session = {c: [] for c in CONFIGS}
     fps = {c: {m: [] for m in METHODS} for c in CONFIGS}
     t0 = time.perf_counter()
@@ -60,22 +60,14 @@ def main() -> None:
                 folder = Path(tmp) / f"{task}-s{seed}"
                 pipeline.simulate(folder, ArmSimSettings(task=task, seed=seed,
                                                          duration_s=args.duration))
-                pipeline.calibrate(folder)
-                pipeline.detect(folder)
                 for c, recipe in CONFIGS.items():
-                    cells = []
-                    for m in METHODS:
-                        r = pipeline.fuse(folder, method=m, seed=seed,
-                                          recipe=recipe.format(m=m) if recipe else None)
-                        fps[c][m].append(r["frames_per_s"])
-                        traj = pd.read_csv(r["trajectory"])
-                        tr = truth_for(folder, traj["t"].to_numpy())
-                        for j in ("wrist", "elbow"):
-                            pooled[c][m][j][0].append(traj[[f"{j}_x", f"{j}_y", f"{j}_z"]].to_numpy())
-                            pooled[c][m][j][1].append(tr[j])
-                        e = error_rows(m, "wrist", pooled[c][m]["wrist"][0][-1], tr["wrist"])
-                        cells.append(e[3]["rmse_cm"])
-                    per_session[c].append((folder.name, cells))
+                    session_rows, speed = score(folder, recipe, seed)
+                    rows[c] += session_rows
+                    for m, v in speed.items():
+                        fps[c][m].append(v)
+                    by = {(r["method"], r["joint"], r["axis"]): r for r in session_rows}
+                    per_session[c].append((folder.name, [by[(m, "wrist", "3d")]["rmse_cm"]
+                                                         for m in METHODS]))
                 print(f"{folder.name}: done", file=sys.stderr)
     wall = time.perf_counter() - t0
     lines = ["# Validation: our Table I", "",
@@ -90,13 +82,9 @@ def main() -> None:
              "Tao & Hu 2008, Table I (real circle motions, wrist, cm, mean/SD for X, Y, Z): " +
              "; ".join(f"{m} {v}" for m, v in PAPER.items()) + ".", ""]
     for c in CONFIGS:
-        rows = []
-        for m in METHODS:
-            for j in ("wrist", "elbow"):
-                est, tr = pooled[c][m][j]
-                rows += error_rows(m, j, np.vstack(est), np.vstack(tr))
-        by = {(r["method"], r["joint"], r["axis"]): r for r in rows}
-        lines += [f"## {c}", "", "```", table_one(rows, "wrist"), "", table_one(rows, "elbow"),
+        rows_c = pooled(rows[c])  # as if over all frames of all sessions at once
+        by = {(r["method"], r["joint"], r["axis"]): r for r in rows_c}
+        lines += [f"## {c}", "", "```", table_one(rows_c, "wrist"), "", table_one(rows_c, "elbow"),
                   "```", "", "Goals of issue 5 for pf-constraint (wrist):", "",
                   "| axis | mean (cm) | goal | SD (cm) | goal | within ±5 cm | goal |",
                   "|---|---|---|---|---|---|---|"]

@@ -13,9 +13,14 @@ import cv2
 import numpy as np
 
 from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.vision.charuco import B_TO_W, MIN_CORNERS
 
-B_TO_W = np.diag([1.0, -1.0, -1.0])  # X_b = B_TO_W X_W (its own inverse)
-MIN_CORNERS = 6
+
+@dataclass(frozen=True)
+class CalibrateSettings:
+    """Recipe section [calibrate]."""
+
+    max_error_px: float = 2.0  # board reprojection error above this is refused
 
 
 @dataclass(frozen=True)
@@ -29,12 +34,7 @@ class BoardPose:
 
     @property
     def camera_position_W(self) -> np.ndarray:
-        return -self.R_WC.T @ self.T_WC
-
-
-def make_board(squares, square_m: float, marker_m: float, dictionary: str):
-    d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
-    return cv2.aruco.CharucoBoard(tuple(int(s) for s in squares), float(square_m), float(marker_m), d)
+        return CameraModel.centre(self.R_WC, self.T_WC)
 
 
 def detect_corners(image: np.ndarray, board) -> tuple[np.ndarray, np.ndarray]:

@@ -13,9 +13,9 @@ import numpy as np
 
 from armtrack_cli.calibrate.board_pose import detect_corners
 from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.vision.charuco import MIN_CORNERS
 
 MIN_VIEWS = 4
-MIN_CORNERS = 8
 
 
 @dataclass(frozen=True)

@@ -57,3 +57,29 @@ def table_one(rows: list[dict], joint: str = "wrist") -> str:
         lines.append(f"{m:<29} {cells[0]:>14} {cells[1]:>14} {cells[2]:>14} "
                      f"{by['3d']['rmse_cm']:>9.2f} {worst:>8.1f}")
     return "\n".join(lines)
+
+
+def pooled(rows: list[dict]) -> list[dict]:
+    """Rows of several sessions combined per (method, joint, axis) exactly as if computed over
+    all their frames at once: pooled mean, SD (ddof = 1) from the within- and between-session
+    sums of squares, RMSE from the summed squares, max and share within ±5 cm by count."""
+    groups: dict[tuple, list[dict]] = {}
+    for r in rows:
+        groups.setdefault((r["method"], r["joint"], r["axis"]), []).append(r)
+    out = []
+    for (method, joint, axis), rs in groups.items():
+        rs = [r for r in rs if r["n"] > 0]
+        n = sum(r["n"] for r in rs)
+        if n == 0:
+            out.append({"method": method, "joint": joint, "axis": axis, "mean_cm": np.nan,
+                        "std_cm": np.nan, "rmse_cm": np.nan, "max_abs_cm": np.nan,
+                        "within_5cm_pct": np.nan, "n": 0})
+            continue
+        mean = sum(r["n"] * r["mean_cm"] for r in rs) / n
+        ss = sum((r["n"] - 1) * r["std_cm"] ** 2 + r["n"] * (r["mean_cm"] - mean) ** 2 for r in rs)
+        out.append({"method": method, "joint": joint, "axis": axis, "mean_cm": mean,
+                    "std_cm": float(np.sqrt(ss / (n - 1))) if n > 1 else 0.0,
+                    "rmse_cm": float(np.sqrt(sum(r["n"] * r["rmse_cm"] ** 2 for r in rs) / n)),
+                    "max_abs_cm": max(r["max_abs_cm"] for r in rs),
+                    "within_5cm_pct": sum(r["n"] * r["within_5cm_pct"] for r in rs) / n, "n": n})
+    return out

@@ -53,3 +53,15 @@ class CalibrationError(DataError):
 
 class OutputError(ArmtrackError):
     """An output could not be written."""
+
+
+def did_you_mean(word: str, options, *, what: str | None = None, form: str = "'{}'") -> str | None:
+    """The hint for a misspelt name: "did you mean 'x'?" for the closest of ``options``, else
+    "WHAT are a, b, c" (None when ``what`` is not given and nothing is close)."""
+    import difflib
+
+    options = [str(o) for o in options]
+    close = difflib.get_close_matches(str(word), options, n=1)
+    if close:
+        return f"did you mean {form.format(close[0])}?"
+    return f"{what} are {', '.join(options) or 'none'}" if what else None

@@ -93,6 +93,16 @@ class CameraModel:
     T_WC: np.ndarray | None = None  # (3,) m
     reprojection_error_px: float | None = None
 
+    @staticmethod
+    def centre(R_WC: np.ndarray, T_WC: np.ndarray) -> np.ndarray:
+        """The optical centre in W: X_C = 0 at X_W = −R_WCᵀ T_WC."""
+        return -R_WC.T @ T_WC
+
+    @property
+    def centre_W(self) -> np.ndarray:
+        """(3,) m, the camera's optical centre in W (needs the pose)."""
+        return self.centre(self.R_WC, self.T_WC)
+
 
 def time_gaps(t: np.ndarray, nominal_dt: float, factor: float = 1.5) -> np.ndarray:
     """Indices i where t[i+1] - t[i] exceeds ``factor`` nominal periods (a gap after sample i)."""

@@ -200,3 +200,11 @@ def initial_wrist(proj: Projection, uv: np.ndarray, *, arm: Arm | None, q_WB: np
     cands = [c + s * d for s in (-bq - np.sqrt(disc), -bq + np.sqrt(disc)) if s > 0]
     above = [p for p in cands if p[2] >= -0.01] or cands
     return min(above, key=lambda p: p[2]), "ray and the arm sphere, the point nearest the table"
+
+
+def ray_misses_arm(proj: Projection, uv: np.ndarray, arm: Arm, q_WB: np.ndarray) -> float:
+    """How far (m) the camera ray of pixel uv passes outside the sphere of radius L1 about
+    S + L2·R u on which the wrist must lie (Tao & Hu eq. 15); 0 when it meets it."""
+    c, d = proj.eye, proj.ray(uv)
+    oc = c - (arm.shoulder + arm.L2 * quat.rotate(q_WB, arm.forearm_B))
+    return max(0.0, float(np.linalg.norm(oc - (oc @ d) * d)) - arm.L1)

@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-METHODS = ("inertial", "ekf", "ukf", "pf", "pf-constraint")
+from armtrack_cli.core.errors import ConfigError, did_you_mean
+from armtrack_cli.core.methods import BUILT as METHODS
+from armtrack_cli.core.methods import DEFAULT_METHOD
+
 SMOOTHERS = ("rts", "none")
 
 
 @dataclass(frozen=True)
 class FuseSettings:
-    method: str = "pf-constraint"
+    method: str = DEFAULT_METHOD
     particles: int = 500  # Tao & Hu IV-A
     resampling: str = "residual"  # Tao & Hu III-E ("standard residual resampling")
     pixel_sigma: float = 4.0  # px, Tao & Hu III-B
@@ -31,3 +34,27 @@ class FuseSettings:
     smoother: str = "rts"  # offline fixed-interval smoothing of the filtered estimates; the
     #                        tao2008-* recipes set "none" to reproduce the paper's filters
     seed: int = 0
+
+
+def checked(s: FuseSettings, where: str) -> FuseSettings:
+    """``s`` if every choice names something that exists, else a ConfigError naming ``where``
+    (the recipe, or --set) and the valid choices."""
+    from armtrack_cli.filters.resampling import SCHEMES
+
+    if s.method not in METHODS:
+        raise ConfigError(where, f"[fuse] method = {s.method!r} is not a method",
+                          did_you_mean(s.method, METHODS, what="methods"))
+    if s.resampling not in SCHEMES:
+        raise ConfigError(where, f"[fuse] resampling = {s.resampling!r} is not a scheme",
+                          did_you_mean(s.resampling, SCHEMES, what="schemes"))
+    if s.smoother not in SMOOTHERS:
+        raise ConfigError(where, f"[fuse] smoother = {s.smoother!r} is not a smoother",
+                          did_you_mean(s.smoother, SMOOTHERS, what="smoothers"))
+    if s.particles < 10:
+        raise ConfigError(where, f"[fuse] particles = {s.particles} is too few", "use 10 or more")
+    return s
+
+
+def with_flags(s: FuseSettings, **flags) -> FuseSettings:
+    """Explicit command-line flags (those not None) win over the recipe."""
+    return replace(s, **{k: v for k, v in flags.items() if v is not None})

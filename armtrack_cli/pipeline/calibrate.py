@@ -3,15 +3,14 @@ from the board in frame N, and for palm sessions the user-specific palm model.""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
-from armtrack_cli.calibrate.board_pose import MIN_CORNERS, board_pose, make_board
-from armtrack_cli.calibrate.intrinsics import calibrate_intrinsics
+from armtrack_cli.calibrate.board_pose import CalibrateSettings, board_pose
+from armtrack_cli.calibrate.intrinsics import MIN_VIEWS, calibrate_intrinsics
+from armtrack_cli.calibrate.lift import lift_pixels
 from armtrack_cli.calibrate.palm_model import PalmFit, label_palm
 from armtrack_cli.core.errors import CalibrationError
 from armtrack_cli.core.streams import CameraModel
@@ -19,55 +18,30 @@ from armtrack_cli.detect.palm_blobs import PalmBlobDetector
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.session.camera_yaml import read_camera_yaml, write_camera_yaml
 from armtrack_cli.session.config import Session, load_session, require
-from armtrack_cli.session.depth import depth_path, read_depth_png
+from armtrack_cli.session.depth import read_depth_frame
 from armtrack_cli.session.images import read_images
-from armtrack_cli.session.outputs import write_text
+from armtrack_cli.session.outputs import output_set
+from armtrack_cli.session.palm_toml import write_palm_toml
 from armtrack_cli.session.recipe import section
 from armtrack_cli.session.video import probe_video, read_frame
-
-HAND_HEIGHT_M = 0.035  # back of a hand lying flat, above the table, when there is no depth
-
-
-@dataclass(frozen=True)
-class CalibrateSettings:
-    max_error_px: float = 2.0  # board reprojection error above this is refused
+from armtrack_cli.vision.charuco import MIN_CORNERS, make_board
 
 
 def _intrinsics(session: Session) -> tuple[CameraModel, dict[str, Any]]:
     src = session.camera.intrinsics
-    if not src.is_dir():
+    if not session.camera.intrinsics_from_images:
         return read_camera_yaml(src), {"intrinsics": str(src)}
     b = session.camera.board
     images = read_images(src)
     fit = calibrate_intrinsics([img for _, img in images], make_board(
         b.squares, b.square_m, b.marker_m, b.dictionary))
     if fit is None:
-        raise CalibrationError(src, f"fewer than 4 of its {len(images)} images show at least 8 "
-                               "board corners", "film the board whole, from 10-25 angles")
+        raise CalibrationError(src, f"fewer than {MIN_VIEWS} of its {len(images)} images show "
+                               f"at least {MIN_CORNERS} board corners",
+                               "film the board whole, from 10-25 angles")
     return fit.camera, {"intrinsics": str(src), "intrinsics_rms_px": round(fit.rms_px, 4),
                         "views_used": fit.views_used,
                         "views_rejected": [images[k][0].name for k in fit.views_rejected]}
-
-
-def lift_pixels(cam: CameraModel, px: np.ndarray, depth: np.ndarray | None) -> np.ndarray:
-    """(k, 3) points in W under pixels: from the depth frame (median of a 5x5 window), else
-    on the plane of the back of a hand lying on the table."""
-    n = cv2.undistortPoints(px.reshape(-1, 1, 2).astype(np.float64), cam.K, cam.dist).reshape(-1, 2)
-    rays = np.c_[n, np.ones(len(n))]
-    eye = -cam.R_WC.T @ cam.T_WC
-    out = np.empty((len(px), 3))
-    for i, (r, (u, v)) in enumerate(zip(rays, px)):
-        z = np.nan
-        if depth is not None:
-            y0, x0 = int(round(v)), int(round(u))
-            win = depth[max(0, y0 - 2):y0 + 3, max(0, x0 - 2):x0 + 3]
-            z = np.nanmedian(win) if np.isfinite(win).any() else np.nan
-        if np.isfinite(z):
-            out[i] = cam.R_WC.T @ (z * r - cam.T_WC)
-        else:
-            d = cam.R_WC.T @ r
-            out[i] = eye + (HAND_HEIGHT_M - eye[2]) / d[2] * d
-    return out
 
 
 def _palm(session: Session, cam: CameraModel, image: np.ndarray, frame: int,
@@ -82,32 +56,15 @@ def _palm(session: Session, cam: CameraModel, image: np.ndarray, frame: int,
                                    "give their pixels with --markers, or try another --frame")
     else:
         px = markers_px
-    dpath = depth_path(session.root, frame)
-    depth = read_depth_png(dpath) if dpath.exists() else None
+    depth = read_depth_frame(session.root, frame)
     pts = lift_pixels(cam, px, depth)
-    eye = -cam.R_WC.T @ cam.T_WC
-    fit = label_palm(pts, p.markers, p.link_m, side=session.meta.side, camera_W=eye)
+    fit = label_palm(pts, p.markers, p.link_m, side=session.meta.side, camera_W=cam.centre_W)
     if fit is None or np.abs(fit.link_residual_m).max() > 0.02:
         worst = "" if fit is None else f" (a link is off by {np.abs(fit.link_residual_m).max() * 100:.1f} cm)"
         raise CalibrationError(session.camera.video, f"frame {frame}: the blobs do not fit the palm "
                                f"model of [palm] link_m{worst}",
                                "check link_m, or give the markers' pixels with --markers")
     return fit, px[fit.blob_index]
-
-
-def _palm_toml(session: Session, fit: PalmFit, px: np.ndarray, frame: int, depth: bool) -> str:
-    fmt = lambda v: "[" + ", ".join(f"{x:.6f}" for x in v) + "]"  # noqa: E731
-    return "\n".join([
-        f"# palm model measured by armtrack calibrate on frame {frame} "
-        f"({'with' if depth else 'without'} depth)",
-        "[palm]", f'side = "{session.meta.side}"',
-        "markers = [" + ", ".join(f'"{m}"' for m in fit.names) + "]",
-        "link_m = " + fmt(session.palm.link_m) + "   # as measured (session.toml)",
-        "angle_deg = " + fmt(fit.angle_deg) + "   # in-plane angle from x_H, from the frame",
-        "position_m = [" + ", ".join(fmt(p) for p in fit.position_H) + "]   # each marker in H",
-        "", "[fit]", f"frame = {frame}",
-        "pixels = [" + ", ".join(fmt(p) for p in px) + "]",
-        "link_residual_m = " + fmt(fit.link_residual_m), ""])
 
 
 def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None = None,
@@ -131,7 +88,7 @@ def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None
     if pose.n_corners < MIN_CORNERS:
         raise CalibrationError(video.path, f"frame {frame}: only {pose.n_corners} board corners "
                                f"found, {MIN_CORNERS} needed", "try another --frame")
-    if pose.rms_px > settings.max_error_px:
+    if not pose.rms_px <= settings.max_error_px:  # NaN too
         raise CalibrationError(video.path, f"frame {frame}: board reprojection error "
                                f"{pose.rms_px:.2f} px is above {settings.max_error_px} px",
                                "check the intrinsics and the board sizes, or try another --frame")
@@ -140,11 +97,17 @@ def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None
     result = {"camera_yaml": str(dest / "camera.yaml"), "frame": frame,
               "reprojection_error_px": round(pose.rms_px, 4), "corners": pose.n_corners,
               "camera_position_m": [round(float(v), 4) for v in pose.camera_position_W], **info}
-    if session.palm is not None:
-        fit, px = _palm(session, cam, image, frame, markers_px)
-        has_depth = depth_path(session.root, frame).exists()
-        write_text(dest / "palm.toml", _palm_toml(session, fit, px, frame, has_depth))
-        result["palm_toml"] = str(dest / "palm.toml")
-        result["palm_link_residual_cm"] = [round(float(v) * 100, 2) for v in fit.link_residual_m]
-    write_camera_yaml(dest / "camera.yaml", cam)
+    palm = _palm(session, cam, image, frame, markers_px) if session.palm is not None else None
+    with output_set():
+        if palm is not None:
+            fit, px = palm
+            write_palm_toml(dest / "palm.toml", side=session.meta.side, names=fit.names,
+                            link_m=session.palm.link_m, angle_deg=fit.angle_deg,
+                            position_H=fit.position_H, pixels=px,
+                            link_residual_m=fit.link_residual_m, frame=frame,
+                            depth=read_depth_frame(session.root, frame) is not None)
+            result["palm_toml"] = str(dest / "palm.toml")
+            result["palm_link_residual_cm"] = [round(float(v) * 100, 2)
+                                               for v in fit.link_residual_m]
+        write_camera_yaml(dest / "camera.yaml", cam)
     return result

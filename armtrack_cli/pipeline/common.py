@@ -18,5 +18,7 @@ def out_dir(session: Session, override: str | Path | None) -> Path:
 def resolve_recipe(recipe: str | None, sets: tuple[str, ...]) -> tuple[dict[str, Any], str]:
     doc, where = load_recipe(recipe)
     doc = apply_overrides(doc, sets)
-    known_sections(doc, RECIPE_SECTIONS, where if not sets else f"{where} + --set")
+    if sets:  # a value that is wrong came from the recipe or --set: name both
+        where = "--set" if where == "defaults" else f"{where} with --set"
+    known_sections(doc, RECIPE_SECTIONS, where)
     return doc, where

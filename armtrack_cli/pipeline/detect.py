@@ -15,7 +15,7 @@ from armtrack_cli.detect.palm_blobs import PalmBlobDetector, PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings, PatchTracker
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.session.config import load_session, require
-from armtrack_cli.session.outputs import write_table
+from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.recipe import section
 from armtrack_cli.session.video import iter_frames_ahead, probe_video
 
@@ -60,8 +60,9 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
                    if len(lost) else 0.0}
     elapsed = time.perf_counter() - start
     dest = out_dir(session, out)
-    write_table(dest / "detections.csv", table, command="detect",
-                settings={"recipe": where, **dataclasses.asdict(settings)})
+    with output_set():
+        write_table(dest / "detections.csv", table, command="detect",
+                    settings={"recipe": where, **dataclasses.asdict(settings)})
     return {"detections": str(dest / "detections.csv"), "frames": video.n_frames,
             "seconds": round(elapsed, 3), "frames_per_s": round(video.n_frames / elapsed, 1),
             "kind": "palm" if session.palm is not None else "patch", **summary}

@@ -10,17 +10,17 @@ import numpy as np
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.session.camera_yaml import write_camera_yaml
 from armtrack_cli.session.depth import depth_path, write_depth_png
-from armtrack_cli.session.export_imu_csv import write_imu_csv
-from armtrack_cli.session.export_mcap import write_imu_mcap
-from armtrack_cli.session.export_qualisys import write_qtm_tsv
-from armtrack_cli.session.export_video import write_video
-from armtrack_cli.session.export_xsens import write_mt_manager
+from armtrack_cli.session.export.imu_csv import write_imu_csv
+from armtrack_cli.session.export.mcap import write_imu_mcap
+from armtrack_cli.session.export.qualisys import write_qtm_tsv
+from armtrack_cli.session.export.video import write_video
+from armtrack_cli.session.export.xsens import write_mt_manager
 from armtrack_cli.session.images import write_image
 from armtrack_cli.session.outputs import staged_folder, write_npz, write_text
 from armtrack_cli.simulate import palm_session
 from armtrack_cli.simulate.arm_session import BOARD, ArmSimSettings, session_toml, simulate_arm
 from armtrack_cli.simulate.calib_images import board_images
-from armtrack_cli.simulate.camera import charuco_board
+from armtrack_cli.vision.charuco import make_board
 
 IMU_FILES = {"xsens": "imu.txt", "csv": "imu.csv", "mcap": "imu.mcap"}
 
@@ -31,7 +31,7 @@ def _write_intrinsics(folder: Path, cam: CameraModel, settings) -> None:
         write_camera_yaml(folder / "intrinsics.yaml", CameraModel(cam.K, cam.dist, cam.width,
                                                                   cam.height))
         return
-    board = charuco_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
+    board = make_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
                           BOARD["dictionary"])
     rng = np.random.default_rng([settings.seed, 23])
     for k, img in enumerate(board_images(cam, board, settings.calib_images, rng)):

@@ -7,15 +7,27 @@ naming the key, what was seen and how to fix it.
 from __future__ import annotations
 
 import datetime as _dt
-import difflib
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core.errors import ConfigError, did_you_mean
+from armtrack_cli.core.limits import MAX_BOARD_SQUARES
+from armtrack_cli.session.files import read_small_text
+from armtrack_cli.session.session_types import (  # noqa: F401  (re-exported for the stages)
+    ArmConfig,
+    BoardConfig,
+    CameraConfig,
+    GroundTruthConfig,
+    HsvRange,
+    ImuConfig,
+    PalmConfig,
+    Session,
+    SessionMeta,
+    SyncConfig,
+)
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -32,111 +44,6 @@ ARUCO_DICTIONARIES = tuple(
      "DICT_APRILTAG_36h10", "DICT_APRILTAG_36h11")
 
 
-@dataclass(frozen=True)
-class SessionMeta:
-    id: str
-    subject: str | None
-    recorded: str | None
-    task: str | None
-    side: str
-
-
-@dataclass(frozen=True)
-class ArmConfig:
-    upper_arm_m: float  # L1, shoulder to elbow
-    forearm_m: float  # L2, elbow to wrist joint (IMU origin)
-    shoulder_m: np.ndarray  # (3,) fixed shoulder joint in W, m
-
-
-@dataclass(frozen=True)
-class BoardConfig:
-    type: str
-    squares: tuple[int, int]  # (columns, rows) of squares, OpenCV's CharucoBoard size
-    square_m: float
-    marker_m: float
-    dictionary: str
-
-
-@dataclass(frozen=True)
-class HsvRange:
-    low: tuple[int, int, int]  # OpenCV HSV: H 0-180, S and V 0-255
-    high: tuple[int, int, int]
-
-    @property
-    def wraps(self) -> bool:
-        """Low H above high H wraps through red (e.g. 170..10)."""
-        return self.low[0] > self.high[0]
-
-
-@dataclass(frozen=True)
-class CameraConfig:
-    video: Path | None
-    intrinsics: Path | None
-    board: BoardConfig | None
-    patch: HsvRange | None
-
-
-@dataclass(frozen=True)
-class ImuConfig:
-    file: Path
-    forearm_axis: str
-    rate_hz: float | None
-    topic: str | None
-
-    @property
-    def forearm_unit(self) -> np.ndarray:
-        """Unit vector in B from the elbow towards the hand."""
-        v = np.zeros(3)
-        v["xyz".index(self.forearm_axis[1])] = 1.0 if self.forearm_axis[0] == "+" else -1.0
-        return v
-
-
-@dataclass(frozen=True)
-class PalmConfig:
-    markers: tuple[str, ...]
-    link_m: tuple[float, ...]
-    colour: HsvRange
-
-
-@dataclass(frozen=True)
-class GroundTruthConfig:
-    file: Path
-    markers: dict[str, str]  # role (shoulder/elbow/wrist or a palm marker) -> QTM marker name
-    to_world: np.ndarray  # (4, 4) Qualisys frame (m) -> W
-
-
-@dataclass(frozen=True)
-class SyncConfig:
-    imu_offset_s: float | str  # float, or "auto"
-    groundtruth_offset_s: float | str
-
-
-@dataclass(frozen=True)
-class Session:
-    root: Path
-    toml_path: Path
-    meta: SessionMeta
-    arm: ArmConfig | None
-    camera: CameraConfig | None
-    imu: ImuConfig | None
-    palm: PalmConfig | None
-    groundtruth: GroundTruthConfig | None
-    sync: SyncConfig
-
-    @property
-    def kind(self) -> str:
-        """'palm' for Cordella marker sessions, 'arm' with an arm model, else 'object'."""
-        if self.palm is not None:
-            return "palm"
-        return "arm" if self.arm is not None else "object"
-
-    @property
-    def out_dir(self) -> Path:
-        return self.root / "armtrack"
-
-
-# ---------------------------------------------------------------- key checking helpers
-
 class _Section:
     """Reads one TOML table, remembering which keys were used so the rest are reported."""
 
@@ -149,9 +56,8 @@ class _Section:
         self.used: set[str] = set()
         for k in table:  # unknown keys first: a typo must not surface as "missing"
             if k not in keys:
-                close = difflib.get_close_matches(k, keys, n=1)
-                self.fail(k, "is not a key armtrack knows", f"did you mean {close[0]!r}?" if close
-                          else f"valid keys are {', '.join(keys)}")
+                self.fail(k, "is not a key armtrack knows",
+                          did_you_mean(k, keys, what="valid keys"))
 
     def key(self, key: str | None) -> str:
         return f"[{self.name}]" if key is None else f"[{self.name}] {key}"
@@ -190,9 +96,8 @@ class _Section:
         if not isinstance(v, str):
             self.fail(key, f"= {v!r} is {_describe(v)}, expected a string")
         if choices is not None and v not in choices:
-            close = difflib.get_close_matches(v, choices, n=1)
             self.fail(key, f"= {v!r} is not one of {', '.join(map(repr, choices))}",
-                      f"did you mean {close[0]!r}?" if close else None)
+                      did_you_mean(v, choices))
         return v
 
     def vector(self, key: str, n: int, *, required=False, integer=False) -> list | None:
@@ -269,6 +174,9 @@ def _board(sec: _Section) -> BoardConfig | None:
     squares = b.vector("squares", 2, required=True, integer=True)
     if min(squares) < 2:
         b.fail("squares", f"= {squares}: a board needs at least 2 x 2 squares")
+    if squares[0] * squares[1] > MAX_BOARD_SQUARES:
+        b.fail("squares", f"= {squares}: more than {MAX_BOARD_SQUARES:,} squares is not a "
+               "printed board", "count the squares along each side, e.g. [7, 5]")
     square = b.number("square_m", required=True, lo=1e-3, hi=1.0, unit="m",
                       hint="board sizes are in metres (0.04, not 40)")
     marker = b.number("marker_m", required=True, lo=1e-3, hi=1.0, unit="m",
@@ -330,9 +238,8 @@ def _groundtruth(path: Path, root: Path, table: Any, palm: PalmConfig | None) ->
         sec.fail("markers", f"is {_describe(markers)}, expected {{ wrist = \"R_WRI\", … }}")
     for role, name in markers.items():
         if role not in roles:
-            close = difflib.get_close_matches(role, roles, n=1)
             sec.fail(f"markers.{role}", "is not a joint armtrack scores",
-                     f"did you mean {close[0]!r}?" if close else f"use one of {', '.join(roles)}")
+                     did_you_mean(role, roles, what="joints"))
         if not isinstance(name, str) or not name:
             sec.fail(f"markers.{role}", f"= {name!r} is not a marker name")
     tw = sec.get("to_world", default=np.eye(4).tolist())
@@ -380,25 +287,18 @@ def load_session(folder: str | Path) -> Session:
     if not root.is_dir():
         raise ConfigError(root, "is not a session folder",
                           "give the folder that holds session.toml")
-    if not path.is_file():
-        raise ConfigError(path, "not found", "a session folder needs a session.toml "
-                          "(see docs/recording-guide.md)")
-    raw = path.read_bytes()
-    if not raw.strip():
+    text = read_small_text(path, ConfigError, "a session.toml", hint="a session folder needs a "
+                           "session.toml (see docs/recording-guide.md)")
+    if not text.strip():
         raise ConfigError(path, "is empty", "it needs at least [camera]/[imu] or [palm] sections")
     try:
-        text = raw.decode("utf-8")
         doc = tomllib.loads(text)
-    except UnicodeDecodeError:
-        raise ConfigError(path, "is not a text file (not UTF-8)") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(path, f"is not valid TOML: {exc}") from None
     for name in doc:
         if name not in SECTIONS:
-            close = difflib.get_close_matches(name, SECTIONS, n=1)
             raise ConfigError(path, f"[{name}] is not a section armtrack knows",
-                              f"did you mean [{close[0]}]?" if close else
-                              f"sections are {', '.join(SECTIONS)}")
+                              did_you_mean(name, SECTIONS, what="sections", form="[{}]"))
     meta = _meta(path, root, doc.get("session", {}))
     arm = _arm(path, doc["arm"]) if "arm" in doc else None
     camera = _camera(path, root, doc["camera"]) if "camera" in doc else None

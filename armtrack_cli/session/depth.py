@@ -41,3 +41,9 @@ def read_depth_png(path: str | Path) -> np.ndarray:
         raise DataError(path, f"is {img.dtype} with {1 if img.ndim == 2 else img.shape[2]} "
                         "channel(s); depth frames are single-channel 16-bit PNG in mm")
     return np.where(img > 0, img.astype(float) / 1000.0, np.nan)
+
+
+def read_depth_frame(session_root: str | Path, frame: int) -> np.ndarray | None:
+    """Frame ``frame``'s depth in metres, or None when the session has no depth for it."""
+    path = depth_path(session_root, frame)
+    return read_depth_png(path) if path.exists() else None

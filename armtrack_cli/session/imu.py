@@ -12,23 +12,21 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import ImuFileError
+from armtrack_cli.core.limits import MAX_ACCEL_M_S2, MAX_GYRO_RAD_S, MAX_SESSION_S, MAX_TEXT_BYTES
 from armtrack_cli.core.streams import ImuSamples
 from armtrack_cli.session import imu_csv, imu_mcap, xsens
+from armtrack_cli.session.files import regular_file
 from armtrack_cli.session.orientation import estimate_orientation
 from armtrack_cli.session.text_table import read_text_lines
 
-MAX_GYRO_RAD_S = 35.0  # 2000 °/s, the largest range of MEMS gyros
 FORMATS = "Xsens MT Manager export, Xsens DOT CSV, generic CSV (t,ax,ay,az,gx,gy,gz) or MCAP"
 
 
 def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | None = None,
              estimate: bool = True) -> ImuSamples:
     """Load an IMU recording into contract conventions (B frame, SI, quaternions B -> W)."""
-    path = Path(path)
-    if not path.exists():
-        raise ImuFileError(path, "not found", "check [imu] file in session.toml")
-    if path.is_dir():
-        raise ImuFileError(path, "is a folder, not an IMU file")
+    path = regular_file(path, ImuFileError, f"an IMU file ({FORMATS})",
+                        hint="check [imu] file in session.toml", max_bytes=MAX_TEXT_BYTES)
     with open(path, "rb") as f:
         head = f.read(8)
     if head == imu_mcap.MAGIC:
@@ -48,6 +46,7 @@ def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | Non
             raise ImuFileError(path, f"is not an IMU format armtrack reads (starts {first!r})",
                                f"expected {FORMATS}")
     check_units(samples)
+    check_usable(samples)
     if samples.n < 2:
         raise ImuFileError(path, f"holds {samples.n} sample: too short to use")
     if samples.quat is None and estimate:
@@ -58,6 +57,30 @@ def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | Non
             "estimated (VQF, gyro+acc)"
         samples = dataclasses.replace(samples, quat=q, orientation_source=source)
     return samples
+
+
+def check_usable(s: ImuSamples) -> None:
+    """Refuse a recording that has no usable sample, a physically impossible one, or a clock
+    that runs for longer than any session (a damaged time column)."""
+    path = Path(s.path)
+    if not np.isfinite(s.acc).all(axis=1).any():
+        raise ImuFileError(path, "has no usable accelerometer sample (every row is empty or NaN)",
+                           "export the accelerometer (Acc_X..Z or ax, ay, az)")
+    if s.quat is not None and not np.isfinite(s.quat).all(axis=1).any():
+        raise ImuFileError(path, "its orientation is empty (NaN) in every row",
+                           "export the orientation, or remove its columns to have armtrack "
+                           "estimate it from the gyroscope and accelerometer")
+    for name, arr, bound, unit in (("accelerometer", s.acc, MAX_ACCEL_M_S2, "m/s² (±16 g)"),
+                                   ("gyroscope", s.gyr, MAX_GYRO_RAD_S, "rad/s")):
+        big = np.abs(np.nan_to_num(arr, nan=0.0)) > bound
+        if big.any():
+            k, ax = np.argwhere(big)[0]
+            raise ImuFileError(path, f"sample {k} (t = {s.t[k]:.3f} s): {name} {'xyz'[ax]} reads "
+                               f"{arr[k, ax]:.4g}, beyond the {bound:g} {unit} a wrist IMU measures",
+                               "the row is damaged: delete it (it becomes a gap)")
+    if s.n and s.t[-1] - s.t[0] > MAX_SESSION_S:
+        raise ImuFileError(path, f"its clock spans {(s.t[-1] - s.t[0]) / 3600:.0f} h, longer "
+                           "than any session", "its time column is damaged")
 
 
 def check_units(s: ImuSamples) -> None:

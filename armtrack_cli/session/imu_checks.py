@@ -19,8 +19,9 @@ def unit_quaternions(path: Path, q: np.ndarray, where: Callable[[int], str], wha
                      hint: str) -> np.ndarray:
     """Normalised q; an error naming the first row whose norm is off by more than 5 %
     (a mislabelled or scaled column, not round-off). NaN rows stay NaN."""
-    norm = np.linalg.norm(q, axis=1)
-    bad = np.isfinite(norm) & (np.abs(norm - 1.0) > NORM_TOLERANCE)
+    with np.errstate(over="ignore", invalid="ignore"):
+        norm = np.linalg.norm(q, axis=1)
+    bad = np.isfinite(q).all(axis=1) & ~(np.abs(norm - 1.0) <= NORM_TOLERANCE)
     if bad.any():
         r = int(np.flatnonzero(bad)[0])
         raise ImuFileError(path, f"{where(r)}: {what} has norm {norm[r]:.3f}, not 1", hint)

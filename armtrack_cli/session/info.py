@@ -12,16 +12,15 @@ from typing import Any
 
 import numpy as np
 
-from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core.errors import ConfigError, DataError
+from armtrack_cli.core.methods import BUILT, NEEDS
 from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStream, time_gaps
 from armtrack_cli.session.camera_yaml import read_camera_yaml
-from armtrack_cli.session.config import Session
+from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.images import IMAGE_EXT
 from armtrack_cli.session.imu import read_imu
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.video import probe_video
-
-METHODS_ARM = ("inertial", "ekf", "ukf", "pf", "pf-constraint")
 
 
 def _span(t: np.ndarray, offset: float | str) -> list[float] | str:
@@ -147,73 +146,34 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
 
 def readiness(session: Session, have: set[str]) -> dict[str, str]:
     """For each command/method: 'ready' or what the session still lacks."""
-    camera = ["video", "intrinsics", "board"]
-    needs = {m: ["imu", *camera, "patch"] for m in METHODS_ARM}
-    needs["pf-constraint"].append("arm")
-    needs["ukf-palm"] = [*camera, "palm", "depth"]
-    needs["compare"] = ["groundtruth"]
     out = {}
-    for name, req in needs.items():
+    for name, req in {**NEEDS, "compare": ("groundtruth",)}.items():
         lack = [r for r in req if r not in have]
         out[name] = "ready" if not lack else "needs " + ", ".join(lack)
-    if out["ukf-palm"] == "ready":  # the data are there; the method is not in this version yet
-        out["ukf-palm"] = "data ready; the method is not in this version yet"
+        if name in NEEDS and name not in BUILT and not lack:
+            out[name] = "data ready; the method is not in this version yet"
     return out
 
 
-def format_text(info: dict[str, Any]) -> str:
-    """The human-readable report printed by `armtrack info`."""
-    s = info["session"]
-    lines = [f"session {s['id']}  ({s['kind']} session, {s['side']} side"
-             + (f", task {s['task']}" if s["task"] else "") + ")", f"  folder  {s['folder']}"]
-    if "imu" in info:
-        i = info["imu"]
-        lines.append(f"imu       {Path(i['file']).name}  [{i['format']}]  {i['samples']} samples at "
-                     f"{i['rate_hz']:g} Hz, {i['duration_s']:.2f} s")
-        lines.append(f"          session span {_fmt_span(i['span_s'])}; dropped samples "
-                     f"{i['dropped_samples']} in {i['gaps']} gaps (largest {i['largest_gap_s']} s)")
-        lines.append(f"          orientation: {i['orientation']}; forearm axis {i['forearm_axis']}")
-        for ch in i["empty_channels"]:
-            lines.append(f"          warning: {ch} has no data")
-        for n in i["notes"]:
-            lines.append(f"          note: {n}")
-    if "video" in info:
-        v = info["video"]
-        lines.append(f"video     {Path(v['file']).name}  {v['frames']} frames {v['width']}x"
-                     f"{v['height']} at {v['fps']:g} fps, {v['duration_s']:.2f} s "
-                     f"(times from {v['times_from']})")
-    if "depth" in info:
-        lines.append(f"depth     {info['depth']['frames']} frames in depth/")
-    if "intrinsics" in info:
-        k = info["intrinsics"]
-        lines.append(f"camera    {k['board_images']} board images in calib/" if "folder" in k else
-                     f"camera    fx {k['fx']:.1f} fy {k['fy']:.1f} cx {k['cx']:.1f} cy {k['cy']:.1f}"
-                     f", {k['size'][0]}x{k['size'][1]}")
-    if "board" in info:
-        b = info["board"]
-        lines.append(f"board     {b['type']} {b['squares'][0]}x{b['squares'][1]} squares of "
-                     f"{b['square_m'] * 100:g} cm, {b['dictionary']}")
-    if "arm" in info:
-        a = info["arm"]
-        lines.append(f"arm       L1 {a['upper_arm_m']} m, L2 {a['forearm_m']} m, shoulder "
-                     f"{a['shoulder_m']} m in W")
-    if "palm" in info:
-        lines.append(f"palm      markers {', '.join(info['palm']['markers'])}")
-    if "groundtruth" in info:
-        g = info["groundtruth"]
-        lines.append(f"qualisys  {Path(g['file']).name}  {g['frames']} frames at {g['rate_hz']:g} Hz, "
-                     f"{g['duration_s']:.2f} s; session span {_fmt_span(g['span_s'])}")
-        miss = ", ".join(f"{k} {v:g}%" for k, v in g["missing_pct"].items())
-        lines.append(f"          markers missing: {miss}")
-        if "reach" in g:
-            r = g["reach"]
-            lines.append(f"          wrist {r['wrist_distance_m'][0]}-{r['wrist_distance_m'][1]} m "
-                         f"from the shoulder (reach {r['reach_m']} m)")
-    lines.append("methods")
-    for name, state in info["methods"].items():
-        lines.append(f"  {name:<14}{state}")
-    return "\n".join(lines)
+VIDEO_EXT = (".mp4", ".avi", ".mkv", ".mov", ".m4v")
 
 
-def _fmt_span(span) -> str:
-    return span if isinstance(span, str) else f"{span[0]:.3f} … {span[1]:.3f} s"
+def describe_path(path: Path, *, imu_rate_hz: float | None = None) -> dict[str, Any]:
+    """A session folder, or a lone recorded file: a Qualisys TSV, a video or an IMU export."""
+    path = Path(path)
+    if path.is_dir():
+        return describe(load_session(path), imu_rate_hz=imu_rate_hz)
+    if not path.is_file():
+        raise DataError(path, "not found", "give a session folder or a recorded file")
+    out: dict[str, Any] = {"session": {"folder": str(path.parent), "id": path.name, "subject": None,
+                                       "task": None, "side": "right", "kind": "file",
+                                       "recorded": None}, "methods": {}}
+    suffix = path.suffix.lower()
+    if suffix == ".tsv":
+        out["groundtruth"] = describe_markers(read_qualisys(path), 0.0)
+    elif suffix in VIDEO_EXT:
+        out["video"] = describe_video(probe_video(path))
+    else:
+        out["imu"] = describe_imu(read_imu(path, rate_hz=imu_rate_hz), 0.0)
+        out["imu"]["forearm_axis"] = "+y"
+    return out

@@ -6,6 +6,9 @@ and the resolved settings (no wall-clock time, so same inputs give byte-identica
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
+import errno
 import json
 import os
 import tempfile
@@ -18,25 +21,62 @@ import pandas as pd
 from armtrack_cli import __version__
 from armtrack_cli.core.errors import OutputError
 
+_STAGED: contextvars.ContextVar[list | None] = contextvars.ContextVar("staged", default=None)
+
 
 def atomic_write(path: str | Path, write: Callable[[Path], None]) -> Path:
-    """Call ``write(tmp_path)`` then rename tmp_path onto ``path``; clean up on failure."""
+    """Call ``write(tmp_path)`` then rename tmp_path onto ``path``; clean up on failure.
+    Inside ``output_set()`` the rename waits for the whole set."""
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+        os.close(fd)
     except OSError as exc:
-        raise OutputError(path.parent, f"cannot create the output folder ({exc.strerror})") from None
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
+        raise OutputError(path.parent, f"cannot write into the output folder ({exc.strerror})",
+                          _hint(exc)) from None
     tmp_path = Path(tmp)
     try:
         write(tmp_path)
         os.chmod(tmp_path, 0o666 & ~_umask())  # mkstemp makes 0600; outputs are shared data
-        os.replace(tmp_path, path)
+        staged = _STAGED.get()
+        if staged is None:
+            os.replace(tmp_path, path)
+        else:
+            staged.append((tmp_path, path))
+    except OSError as exc:
+        tmp_path.unlink(missing_ok=True)
+        raise OutputError(path, f"could not be written ({exc.strerror})", _hint(exc)) from None
     except BaseException:
         tmp_path.unlink(missing_ok=True)
         raise
     return path
+
+
+def _hint(exc: OSError) -> str | None:
+    return {errno.ENOSPC: "free some disk space and run again",
+            errno.EACCES: "choose a folder you may write to (--out)",
+            errno.EROFS: "choose a folder you may write to (--out)"}.get(exc.errno)
+
+
+@contextlib.contextmanager
+def output_set():
+    """A stage's outputs (data, meta, kinematics) appear together or not at all: writes in
+    the block are staged beside their targets and renamed into place when it ends; a failure
+    or an interrupt anywhere in it removes every staged file and leaves the targets as they
+    were."""
+    staged: list[tuple[Path, Path]] = []
+    token = _STAGED.set(staged)
+    try:
+        yield
+    except BaseException:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        raise
+    finally:
+        _STAGED.reset(token)
+    for tmp, final in staged:  # renames within one folder: no bytes move, nothing can fill
+        os.replace(tmp, final)
 
 
 def _umask() -> int:
@@ -86,7 +126,6 @@ def staged_folder(final: str | Path, *, force: bool = False):
 
     A failed run leaves neither a half-written folder nor the temp folder behind.
     """
-    import contextlib
     import shutil
 
     final = Path(final)

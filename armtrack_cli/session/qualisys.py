@@ -13,11 +13,14 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.limits import MAX_SESSION_S
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.text_table import parse_table, read_text_lines
 
 MM = 1e-3  # QTM exports millimetres
 _KEY = re.compile(r"^[A-Z][A-Z0-9_]*(\t|$)")
+
+MAX_MARKER_MM = 100_000.0  # 100 m: no motion-capture volume is larger
 
 
 def _header(path: Path, lines: list[str]) -> tuple[dict[str, list[str]], int]:
@@ -83,6 +86,12 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     if coords.shape[1] != 3 * m:
         raise GroundTruthError(path, f"has {coords.shape[1]} coordinate columns for {m} markers "
                                f"(expected {3 * m})", "is MARKER_NAMES complete?")
+    far = np.isinf(coords) | (np.abs(np.nan_to_num(coords)) > MAX_MARKER_MM)
+    if far.any():
+        r, k = np.argwhere(far)[0]
+        raise GroundTruthError(path, f"line {tab.line_of[r]}: marker {names[k // 3]} has "
+                               f"{'XYZ'[k % 3]} = {coords[r, k]:g} mm, beyond any capture volume",
+                               "the row is damaged: empty its cells (a gap)")
     xyz = coords.reshape(-1, m, 3) * MM
     xyz[np.all(xyz == 0.0, axis=2)] = np.nan  # QTM writes gaps as zeros in some versions
     xyz[np.any(np.isnan(xyz), axis=2)] = np.nan
@@ -100,6 +109,13 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
         r = int(np.flatnonzero(d <= 0)[0]) + 1
         raise GroundTruthError(path, f"line {tab.line_of[r]}: time goes from {t[r - 1]:g} to "
                                f"{t[r]:g} s", "frames must be in increasing time order")
+    step = float(np.median(d)) if d.size else 1.0 / freq
+    if abs(step * freq - 1.0) > 0.05:  # the Time column must tick at FREQUENCY
+        raise GroundTruthError(path, f"its Time column steps by {step:g} per frame, but FREQUENCY "
+                               f"{freq:g} Hz means {1 / freq:g} s (is the time in ms?)",
+                               "export Time in seconds, as QTM does")
+    if t[-1] - t[0] > MAX_SESSION_S:
+        raise GroundTruthError(path, f"spans {(t[-1] - t[0]) / 3600:.0f} h: its time is damaged")
     notes = list(tab.notes)
     n_frames = keys.get("NO_OF_FRAMES", [None])[0]
     if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
@@ -116,6 +132,9 @@ def select_markers(traj: MarkerTrajectories, wanted: dict[str, str], toml: Path)
                                    f"{role} in {toml.name})",
                                    f"its markers are {', '.join(traj.names)}")
         out[role] = traj.names.index(name)
+        if not np.isfinite(traj.xyz[:, out[role]]).all(axis=1).any():
+            raise GroundTruthError(traj.path, f"marker {name!r} ({role}) is never seen: every "
+                                   "frame is a gap", "check the marker labels in QTM")
     return out
 
 

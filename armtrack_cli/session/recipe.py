@@ -1,4 +1,9 @@
-"""Recipes: TOML files of detector and filter settings (recipes/NAME.toml, or a path).
+"""Recipes: TOML files of detector and filter settings (a path, or a recipe's name).
+
+A name is looked up in ./recipes/, then in each folder of $ARMTRACK_RECIPES (a user's or
+lab's own recipes, separated by the path separator), then among the recipes shipped inside
+the package (armtrack_cli/recipes, package data, so an installed armtrack finds them from any
+folder).
 
 Settings resolve as dataclass defaults < recipe < ``--set key=value``. An unknown key or a
 misspelt section is an error that lists the valid ones; the resolved settings are written
@@ -8,40 +13,59 @@ beside every output.
 from __future__ import annotations
 
 import dataclasses
-import difflib
+import math
+import os
 import sys
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core import limits
+from armtrack_cli.core.errors import ConfigError, did_you_mean
+from armtrack_cli.session.files import read_small_text
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-RECIPE_DIRS = (Path.cwd() / "recipes", Path(__file__).resolve().parents[2] / "recipes")
+ENV_VAR = "ARMTRACK_RECIPES"
+
+
+def recipe_dirs() -> list[Path]:
+    """Where names are looked up, first match wins."""
+    user = [Path(p) for p in os.environ.get(ENV_VAR, "").split(os.pathsep) if p]
+    return [Path.cwd() / "recipes", *user, bundled_dir()]
+
+
+def bundled_dir() -> Path:
+    return Path(str(resources.files("armtrack_cli.recipes")))
 
 
 def recipe_names() -> list[str]:
-    return sorted({p.stem for d in RECIPE_DIRS if d.is_dir() for p in d.glob("*.toml")})
+    return sorted({p.stem for d in recipe_dirs() if d.is_dir() for p in d.glob("*.toml")})
+
+
+def recipe_file(recipe: str | None) -> Path | None:
+    """The file a recipe name or path resolves to (None for none, or one not found)."""
+    if recipe is None:
+        return None
+    if Path(recipe).exists() or Path(recipe).is_symlink():
+        return Path(recipe)  # a path: read_small_text says what is wrong with it
+    return next((d / f"{recipe}.toml" for d in recipe_dirs() if (d / f"{recipe}.toml").is_file()),
+                None)
 
 
 def load_recipe(recipe: str | None) -> tuple[dict[str, Any], str]:
     """(nested dict, where it came from) for a recipe name or path; ({}, "defaults") for None."""
     if recipe is None:
         return {}, "defaults"
-    path = Path(recipe)
-    if not path.is_file():
-        found = [d / f"{recipe}.toml" for d in RECIPE_DIRS if (d / f"{recipe}.toml").is_file()]
-        if not found:
-            close = difflib.get_close_matches(recipe, recipe_names(), n=1)
-            raise ConfigError(recipe, "is neither a recipe file nor a recipe name",
-                              f"did you mean {close[0]!r}?" if close else
-                              f"recipes are {', '.join(recipe_names()) or 'none'}")
-        path = found[0]
+    path = recipe_file(recipe)
+    if path is None:
+        raise ConfigError(recipe, "is neither a recipe file nor a recipe name",
+                          did_you_mean(recipe, recipe_names(), what="recipes"))
     try:
-        return tomllib.loads(path.read_text()), str(path)
+        return tomllib.loads(read_small_text(path, ConfigError, "a recipe (TOML)")), str(path)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(path, f"is not valid TOML: {exc}") from None
 
@@ -77,22 +101,34 @@ def section(doc: dict[str, Any], path: str, cls: type, where: str):
     valid = {f.name: f for f in dataclasses.fields(cls)}
     for k in node:
         if k not in valid:
-            close = difflib.get_close_matches(k, list(valid), n=1)
             raise ConfigError(where, f"[{path}] {k} is not a setting",
-                              f"did you mean {close[0]!r}?" if close else
-                              f"settings are {', '.join(valid)}")
+                              did_you_mean(k, valid, what="settings"))
     kwargs = {}
     for k, v in node.items():
         default = getattr(cls(), k)
         if isinstance(default, (int, float)) and not isinstance(default, bool):
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise ConfigError(where, f"[{path}] {k} = {v!r} is not a number")
-            v = type(default)(v) if not (isinstance(default, int) and not float(v).is_integer()) \
-                else v
+            v = _number(v, default, f"{path}.{k}", where)
         elif isinstance(default, str) and not isinstance(v, str):
             raise ConfigError(where, f"[{path}] {k} = {v!r} is not a string")
         kwargs[k] = v
     return cls(**kwargs)
+
+
+def _number(v: Any, default: int | float, key: str, where: str) -> int | float:
+    """A numeric setting: a finite number of the default's kind, inside limits.SETTINGS."""
+    section_name, name = key.rsplit(".", 1)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise ConfigError(where, f"[{section_name}] {name} = {v!r} is not a finite number")
+    if isinstance(default, int):
+        if not float(v).is_integer():
+            raise ConfigError(where, f"[{section_name}] {name} = {v!r} is not a whole number")
+        v = int(v)
+    else:
+        v = float(v)
+    lo, hi = limits.SETTINGS.get(key, (-math.inf, math.inf))
+    if not lo <= v <= hi:
+        raise ConfigError(where, f"[{section_name}] {name} = {v!r} is outside {lo:g} … {hi:g}")
+    return v
 
 
 def known_sections(doc: dict[str, Any], sections: tuple[str, ...], where: str) -> None:
@@ -102,10 +138,8 @@ def known_sections(doc: dict[str, Any], sections: tuple[str, ...], where: str) -
             name = f"{prefix}{k}"
             if isinstance(v, dict):
                 if name not in sections and not any(s.startswith(name + ".") for s in sections):
-                    close = difflib.get_close_matches(name, sections, n=1)
                     raise ConfigError(where, f"[{name}] is not a recipe section",
-                                      f"did you mean [{close[0]}]?" if close else
-                                      f"sections are {', '.join(sections)}")
+                                      did_you_mean(name, sections, what="sections", form="[{}]"))
                 if name not in sections:
                     walk(v, name + ".")
     walk(doc, "")

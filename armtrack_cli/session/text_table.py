@@ -13,6 +13,8 @@ import numpy as np
 import pandas as pd
 
 from armtrack_cli.core.errors import DataError
+from armtrack_cli.core.limits import MAX_TEXT_BYTES
+from armtrack_cli.session.files import regular_file
 
 MISSING_TOKENS = {"", "nan", "na", "n/a", "null", "-nan"}
 
@@ -47,12 +49,7 @@ def read_text_lines(path: Path, error: type[DataError], what: str) -> list[str]:
 
     Binary files (NUL bytes) and empty files are refused with ``error``.
     """
-    try:
-        raw = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise error(path, "not found") from None
-    except IsADirectoryError:
-        raise error(path, f"is a folder, not {what}") from None
+    raw = regular_file(path, error, what, max_bytes=MAX_TEXT_BYTES).read_bytes()
     if not raw.strip():
         raise error(path, f"is empty, expected {what}")
     if b"\x00" in raw[:65536]:

@@ -18,6 +18,7 @@ import numpy as np
 from armtrack_cli.core.errors import VideoError
 from armtrack_cli.core.streams import VideoStream
 from armtrack_cli.session import imu_mcap
+from armtrack_cli.session.files import regular_file
 from armtrack_cli.session.text_table import parse_table, read_text_lines
 
 IMAGE_SCHEMAS = ("sensor_msgs/msg/CompressedImage", "foxglove.CompressedImage")
@@ -52,11 +53,7 @@ def read_timestamps(path: Path, n_frames: int) -> np.ndarray:
 
 def probe_video(path: str | Path, *, topic: str | None = None) -> VideoStream:
     """What the camera recording holds, without keeping its frames."""
-    path = Path(path)
-    if not path.exists():
-        raise VideoError(path, "not found", "check [camera] video in session.toml")
-    if path.is_dir():
-        raise VideoError(path, "is a folder, not a video")
+    path = regular_file(path, VideoError, "a video", hint="check [camera] video in session.toml")
     if path.stat().st_size == 0:
         raise VideoError(path, "is empty (0 bytes)")
     with open(path, "rb") as f:
@@ -100,7 +97,8 @@ def iter_frames(video: VideoStream) -> Iterator[tuple[int, float, np.ndarray]]:
         while i < video.n_frames:
             ok, frame = cap.read()
             if not ok:
-                break
+                raise VideoError(video.path, f"frame {i} of {video.n_frames} cannot be decoded: the "
+                                 "file is damaged or truncated", "re-export or re-copy the video")
             yield i, float(video.t[i]), frame
             i += 1
     finally:

@@ -64,11 +64,26 @@ def _unwrap(v: np.ndarray, wrap: int) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(d)])
 
 
+def _header_rate(path: Path, i: int, text: str) -> float:
+    """The rate of an ``// Update Rate: 100.0Hz`` line, checked to be a sane number."""
+    try:
+        rate = float(text)
+    except ValueError:
+        raise ImuFileError(path, f"line {i + 1}: Update Rate {text!r} is not a number of Hz",
+                           "correct or delete that header line") from None
+    if not 1.0 <= rate <= 10000.0:
+        raise ImuFileError(path, f"line {i + 1}: Update Rate {rate:g} Hz is outside 1 … 10000 Hz",
+                           "correct or delete that header line")
+    return rate
+
+
 def _counter_steps(path: Path, tab: TextTable, counter: np.ndarray) -> np.ndarray:
     """Steps between consecutive packet counters (1 = none lost), checked for repeats."""
-    if np.isnan(counter).any():
-        r = int(np.flatnonzero(np.isnan(counter))[0])
-        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter is empty")
+    bad = ~np.isfinite(counter) | (counter < 0) | (counter != np.round(counter))
+    if bad.any():
+        r = int(np.flatnonzero(bad)[0])
+        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter is empty or not a "
+                           f"whole number ({counter[r]})")
     d = np.mod(np.diff(counter), COUNTER_WRAP)
     if (d == 0).any():
         r = int(np.flatnonzero(d == 0)[0]) + 1
@@ -95,12 +110,26 @@ def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float 
     dropped = int(np.sum(steps - 1)) if steps is not None else 0
     stf = _vec(tab, ["SampleTimeFine"])
     if stf is not None and np.isfinite(stf).all():
+        bad = (stf[:, 0] < 0) | (stf[:, 0] >= STF_WRAP) | (stf[:, 0] != np.round(stf[:, 0]))
+        if bad.any():
+            r = int(np.flatnonzero(bad)[0])
+            raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine {stf[r, 0]:g} is not "
+                               "a tick count (a whole number from 0 to 2^32 − 1)")
+        back = np.diff(stf[:, 0])
+        # a wrap at 2^32 jumps back by nearly 2^32; a smaller step back is a damaged row
+        bad = (back <= 0) & (back > -STF_WRAP / 2)
+        if bad.any():
+            r = int(np.flatnonzero(bad)[0]) + 1
+            raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine steps back or "
+                               f"repeats ({int(stf[r - 1, 0])} then {int(stf[r, 0])})",
+                               "rows are out of order or the file mixes recordings")
         t = _unwrap(stf[:, 0], STF_WRAP) * stf_tick_s
-        if (np.diff(t) <= 0).any():
-            r = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
-            raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine does not increase")
         per_step = np.diff(t) / (steps if steps is not None else 1)
-        rate = header_rate or float(1.0 / np.median(per_step))
+        rate = float(1.0 / np.median(per_step))  # the clock itself, not a header line
+        if header_rate is not None and abs(header_rate / rate - 1.0) > 0.05:
+            raise ImuFileError(path, f"states Update Rate {header_rate:g} Hz but its "
+                               f"SampleTimeFine clock runs at {rate:.4g} Hz",
+                               "correct or delete the Update Rate header line")
         return t, rate, dropped, notes
     if stf is not None and np.isfinite(stf).any():
         r = int(np.flatnonzero(~np.isfinite(stf[:, 0]))[0])
@@ -187,9 +216,9 @@ def read_mt_manager(path: Path, *, rate_hz: float | None = None,
     header_at = None
     for i, ln in enumerate(lines):
         if ln.startswith("//"):
-            m = re.search(r"update rate:\s*([0-9.]+)\s*hz", ln, re.I)
+            m = re.search(r"update rate:\s*(.*?)\s*(hz)?\s*$", ln, re.I)
             if m:
-                header_rate = float(m.group(1))
+                header_rate = _header_rate(path, i, m.group(1))
             m = re.search(r"coordinate system:\s*(\w+)", ln, re.I)
             if m:
                 coord = m.group(1).upper()

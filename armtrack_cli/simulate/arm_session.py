@@ -15,7 +15,7 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.simulate import imu_model, kinematics, render
-from armtrack_cli.simulate.camera import charuco_board, default_camera, project
+from armtrack_cli.simulate.camera import default_camera, project
 from armtrack_cli.simulate.capture import (
     QTM_TO_WORLD,
     CameraNoise,
@@ -23,6 +23,7 @@ from armtrack_cli.simulate.capture import (
     qualisys_markers,
     to_world_toml,
 )
+from armtrack_cli.vision.charuco import make_board
 
 BOARD = {"squares": (7, 5), "square_m": 0.04, "marker_m": 0.03, "dictionary": "DICT_4X4_50"}
 PATCH_BGR = (25, 35, 225)  # saturated red-orange
@@ -122,11 +123,11 @@ def simulate_arm(s: ArmSimSettings) -> ArmSimulation:
     xyz_q = qualisys_markers(np.stack([qs.shoulder, qs.elbow, qs.wrist], 1), s.marker_noise_m,
                              s.gt_gaps, 2, s.qualisys_hz, rng)
     # --- scene and truth
-    board = charuco_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
+    board = make_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
                           BOARD["dictionary"])
     scene = render.build_scene(cam, board, BOARD["square_m"], PATCH_BGR, rng)
     wrist_px, _ = project(cam, fs.wrist)
-    eye = -cam.R_WC.T @ cam.T_WC
+    eye = cam.centre_W
     facing = np.einsum("ni,ni->n", quat.rotate(fs.q_WB, [0.0, 0, 1]), eye - fs.wrist) > 0
     inside = (wrist_px[:, 0] >= 0) & (wrist_px[:, 0] < s.width) & (wrist_px[:, 1] >= 0) & (
         wrist_px[:, 1] < s.height)

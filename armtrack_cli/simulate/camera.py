@@ -9,8 +9,6 @@ import numpy as np
 
 from armtrack_cli.core.streams import CameraModel
 
-B_TO_W = np.diag([1.0, -1.0, -1.0])  # board frame -> W (its own inverse)
-
 
 def look_at(eye: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """R_WC, T_WC of a camera at ``eye`` looking at ``target`` with image 'up' towards +z_W."""
@@ -51,7 +49,3 @@ def pixel_rays(cam: CameraModel) -> np.ndarray:
     n = n.reshape(cam.height, cam.width, 2).astype(float)
     return np.concatenate([n, np.ones((cam.height, cam.width, 1))], -1)
 
-
-def charuco_board(squares: tuple[int, int], square_m: float, marker_m: float, dictionary: str):
-    d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary))
-    return cv2.aruco.CharucoBoard(tuple(squares), square_m, marker_m, d)

@@ -13,7 +13,7 @@ from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.simulate import hand, render
 from armtrack_cli.simulate.arm_session import BOARD
-from armtrack_cli.simulate.camera import charuco_board, default_camera, project
+from armtrack_cli.simulate.camera import default_camera, project
 from armtrack_cli.simulate.capture import (
     CameraNoise,
     CaptureSettings,
@@ -21,6 +21,7 @@ from armtrack_cli.simulate.capture import (
     to_world_toml,
 )
 from armtrack_cli.simulate.render_hand import draw_hand
+from armtrack_cli.vision.charuco import make_board
 
 CLUTTER_W = np.array([0.56, 0.02, 0.0])
 COLOUR_HSV = ((100, 150, 60), (130, 255, 255))
@@ -77,7 +78,7 @@ def simulate_palm(s: PalmSimSettings) -> PalmSimulation:
     q_WH = motion.q_WH(frame_t)
     markers_W = wrist[:, None, :] + np.einsum("nij,kj->nki", quat.to_matrix(q_WH), palm_H)
     px, _ = project(cam, markers_W.reshape(-1, 3))
-    eye = -cam.R_WC.T @ cam.T_WC
+    eye = cam.centre_W
     normal = quat.rotate(q_WH, [0.0, 0, 1])
     facing = np.einsum("ni,nki->nk", normal, eye - markers_W) > 0
     hidden = np.zeros_like(facing)
@@ -88,7 +89,7 @@ def simulate_palm(s: PalmSimSettings) -> PalmSimulation:
     mq = motion.wrist(tq)[:, None, :] + np.einsum("nij,kj->nki", quat.to_matrix(motion.q_WH(tq)),
                                                   palm_H)
     xyz_q = qualisys_markers(mq, s.marker_noise_m, s.gt_gaps, 0, s.qualisys_hz, rng)
-    board = charuco_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
+    board = make_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
                           BOARD["dictionary"])
     scene = render.build_scene(cam, board, BOARD["square_m"], (0, 0, 255), rng)
     dense_t = np.arange(int(round((s.duration_s + 0.5) * 200))) / 200.0

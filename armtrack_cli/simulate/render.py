@@ -59,7 +59,7 @@ def build_scene(cam: CameraModel, board, square_m: float, patch_bgr, rng) -> Sce
     tex = table_texture(board_img, rng)
     rays = pixel_rays(cam)  # (H, W, 3) in C
     d_W = rays @ cam.R_WC  # ray directions in W (R_WCᵀ · ray)
-    eye = -cam.R_WC.T @ cam.T_WC
+    eye = cam.centre_W
     s = -eye[2] / d_W[..., 2]  # hit the table plane z = 0
     hit = eye + s[..., None] * d_W
     ok = (s > 0) & np.isfinite(s)
@@ -127,7 +127,7 @@ def draw_frame(scene: Scene, *, shoulder, elbow, wrist, q_WB, forearm_unit_B,
         _limb(img, cam, *segs[k])
     corners = patch_corners(wrist, q_WB, scene.patch_side_m)
     normal = quat.rotate(q_WB, [0.0, 0.0, 1.0])
-    eye = -cam.R_WC.T @ cam.T_WC
+    eye = cam.centre_W
     facing = float(normal @ (eye - wrist)) > 0
     sensor = patch_corners(wrist, q_WB, scene.patch_side_m * 1.35)
     _poly(img, project(cam, sensor)[0], (45, 45, 45))

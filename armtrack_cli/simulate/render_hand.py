@@ -30,7 +30,7 @@ def draw_hand(scene: Scene, *, wrist, q_WH, q_WF, palm_H, clutter_W=None, hidden
     cam = scene.cam
     img = scene.background.copy()
     label = np.zeros(img.shape[:2], np.uint8)  # 1 forearm, 2 hand
-    eye = -cam.R_WC.T @ cam.T_WC
+    eye = cam.centre_W
     if clutter_W is not None:
         _poly(img, project(cam, _disc(clutter_W, np.array([0, 0, 1.0]), 0.01))[0], MARKER_BGR)
     xF = quat.rotate(q_WF, [1.0, 0, 0])

@@ -17,9 +17,9 @@ import cv2
 import numpy as np
 
 from armtrack_cli.core import quaternion as Q
-from armtrack_cli.session.export_mcap import write_imu_mcap
-from armtrack_cli.session.export_qualisys import format_qtm_tsv
-from armtrack_cli.session.export_xsens import format_mt_manager
+from armtrack_cli.session.export.mcap import write_imu_mcap
+from armtrack_cli.session.export.qualisys import format_qtm_tsv
+from armtrack_cli.session.export.xsens import format_mt_manager
 
 HERE = Path(__file__).resolve().parent
 RNG = np.random.default_rng(2026)
@@ -94,7 +94,7 @@ def mcap_other_topic() -> bytes:
 def mcap_two_topics() -> bytes:
     from mcap_ros2.writer import Writer
 
-    from armtrack_cli.session.export_mcap import IMU_MSGDEF, _imu_msg
+    from armtrack_cli.session.export.mcap import IMU_MSGDEF, _imu_msg
 
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "x.mcap"

@@ -1,21 +1,26 @@
-"""The `armtrack` command line: thin click commands over ``pipeline`` (the only click importer).
+"""The `armtrack` commands: thin click wrappers over ``pipeline``.
 
 Exit codes: 0 success; 1 bad data, printed as one line ``error: FILE: what is wrong`` (no
-traceback); 2 bad usage (click's own).
+traceback); 2 bad usage (click's own); 130 interrupted.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import sys
 import traceback
 
 import click
-import numpy as np
 
-from armtrack_cli import __version__, pipeline
+from armtrack_cli import __version__
+from armtrack_cli.cli import text
+from armtrack_cli.cli.batch import each, emit, expand, out_for, progress
 from armtrack_cli.core.errors import ArmtrackError
+from armtrack_cli.core.limits import MAX_PARTICLES
+from armtrack_cli.core.methods import BUILT, METHODS
+
+# Heavy libraries (OpenCV, SciPy, pandas, matplotlib) are imported by the pipeline, which each
+# command imports when it runs: `armtrack --help` and a shell script's calls start at once.
 
 
 class _Group(click.Group):
@@ -31,7 +36,7 @@ class _Group(click.Group):
             raise
         except KeyboardInterrupt:
             click.echo("error: interrupted", err=True)
-            ctx.exit(1)
+            ctx.exit(130)
         except Exception as exc:  # a bug of ours: still one line, traceback on request
             if os.environ.get("ARMTRACK_DEBUG"):
                 traceback.print_exc()
@@ -40,9 +45,23 @@ class _Group(click.Group):
             ctx.exit(1)
 
 
+class Finite(click.FloatRange):
+    """A float in a range, with NaN and infinities refused (click's FloatRange lets NaN by)."""
+
+    def convert(self, value, param, ctx):
+        import math
+
+        v = super().convert(value, param, ctx)
+        if not math.isfinite(v):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return v
+
+
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 out_option = click.option("--out", "out_dir", type=click.Path(file_okay=False),
-                          help="Write outputs here instead of SESSION/armtrack/.")
+                          help="Work folder: read earlier stages' outputs from it and write this "
+                          "stage's outputs to it; default SESSION/armtrack/ (with several "
+                          "sessions, DIR/SESSION_NAME/).")
 recipe_option = click.option("--recipe", help="Recipe name in recipes/ (e.g. default) or a TOML "
                              "path; settings resolve as defaults < recipe < --set.")
 set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
@@ -51,19 +70,14 @@ set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
 json_option = click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
 
 
-def _emit(result: dict, as_json: bool, lines: list[str]) -> None:
-    if as_json:
-        click.echo(json.dumps(result, indent=2, sort_keys=True))
-    else:
-        click.echo("\n".join(lines))
-
-
-def _parse_pixels(spec: str) -> np.ndarray:
+def _parse_pixels(spec: str):
     """'u1,v1;u2,v2;…' -> (k, 2) array."""
+    import numpy as np
+
     try:
         pts = [tuple(float(x) for x in p.split(",")) for p in spec.replace(" ", "").split(";") if p]
         arr = np.array(pts, float)
-        if arr.ndim != 2 or arr.shape[1] != 2:
+        if arr.ndim != 2 or arr.shape[1] != 2 or not np.isfinite(arr).all():
             raise ValueError
         return arr
     except ValueError:
@@ -85,7 +99,7 @@ def main() -> None:
 @main.command()
 @click.argument("session", type=click.Path(exists=False))
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
-@click.option("--imu-rate", "imu_rate", type=click.FloatRange(min=1.0, max=10000.0),
+@click.option("--imu-rate", "imu_rate", type=Finite(min=1.0, max=10000.0),
               help="IMU rate in Hz for exports that state none (as [imu] rate_hz does).")
 @out_option
 def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | None) -> None:
@@ -94,11 +108,13 @@ def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | Non
 
     SESSION is a session folder, or a single recorded file (IMU export, Qualisys TSV, video).
     """
+    from armtrack_cli import pipeline
+
     result = pipeline.info(session, imu_rate_hz=imu_rate, out_dir=out_dir)
     if as_json:
         click.echo(json.dumps(result, indent=2, sort_keys=True))
     else:
-        click.echo(pipeline.format_info(result))
+        click.echo(text.info_text(result))
 
 
 @main.command()
@@ -116,20 +132,15 @@ def calibrate(sessions, frame, markers, recipe, sets, as_json, out_dir) -> None:
     intrinsics.yaml or from board images in calib/), written to camera.yaml; for palm sessions
     also the palm model (palm.toml)."""
     px = _parse_pixels(markers) if markers else None
-    for folder in _expand(sessions):
-        r = pipeline.calibrate(folder, frame=frame, markers_px=px, out=_out_for(out_dir, folder,
-                                                                               sessions),
-                               recipe=recipe, sets=sets)
-        lines = [f"{folder}: board in frame {r['frame']}: {r['corners']} corners, reprojection "
-                 f"error {r['reprojection_error_px']:.3f} px",
-                 f"  camera at {r['camera_position_m']} m in W -> {r['camera_yaml']}"]
-        if "intrinsics_rms_px" in r:
-            lines.insert(0, f"{folder}: intrinsics from {r['views_used']} board images, RMS "
-                         f"{r['intrinsics_rms_px']:.3f} px")
-        if "palm_toml" in r:
-            lines.append(f"  palm model -> {r['palm_toml']} (link residuals "
-                         f"{r['palm_link_residual_cm']} cm)")
-        _emit(r, as_json, lines)
+
+    from armtrack_cli import pipeline
+
+    def work(folder, out):
+        r = pipeline.calibrate(folder, frame=frame, markers_px=px, out=out, recipe=recipe,
+                               sets=sets)
+        return r, text.calibrate_lines(folder, r)
+
+    each(sessions, out_dir, as_json, work)
 
 
 @main.command()
@@ -141,29 +152,28 @@ def calibrate(sessions, frame, markers, recipe, sets, as_json, out_dir) -> None:
 def detect(sessions, recipe, sets, as_json, out_dir) -> None:
     """The wrist patch in every frame (CamShift), or every palm-marker candidate blob,
     written to detections.csv."""
-    for folder in _expand(sessions):
+    from armtrack_cli import pipeline
+
+    def work(folder, out):
         n = pipeline.frame_count(folder) if not as_json else 0
-        with _progress(n, f"detect {os.path.basename(str(folder).rstrip('/'))}",
-                       quiet=as_json) as bar:
-            r = pipeline.detect(folder, out=_out_for(out_dir, folder, sessions), recipe=recipe,
-                                sets=sets, on_frame=bar)
-        if r["kind"] == "patch":
-            line = (f"{folder}: patch found in {r['ok_frames']} of {r['frames']} frames, "
-                    f"{r['lost_spans']} losses (longest {r['longest_loss_s']} s)")
-        else:
-            line = f"{folder}: {r['blobs']} candidate blobs in {r['frames']} frames"
-        _emit(r, as_json, [line + f", {r['frames_per_s']:.0f} frames/s -> {r['detections']}"])
+        with progress(n, f"detect {os.path.basename(str(folder).rstrip('/'))}",
+                      quiet=as_json) as bar:
+            r = pipeline.detect(folder, out=out, recipe=recipe, sets=sets, on_frame=bar)
+        return r, text.detect_lines(folder, r)
+
+    each(sessions, out_dir, as_json, work)
 
 
-METHOD_CHOICE = click.Choice(["inertial", "ekf", "ukf", "pf", "pf-constraint"])
+METHOD_CHOICE = click.Choice(list(BUILT))
 
 
 @main.command()
 @click.argument("sessions", nargs=-1, required=True, type=click.Path())
 @recipe_option
 @click.option("--method", type=METHOD_CHOICE, help="Fusion method (overrides the recipe's).")
-@click.option("--particles", type=click.IntRange(min=10), help="Particles (PF methods).")
-@click.option("--seed", type=int, help="Random seed (same seed, same bytes).")
+@click.option("--particles", type=click.IntRange(min=10, max=MAX_PARTICLES),
+              help=f"Particles (PF methods), 10 to {MAX_PARTICLES:,}.")
+@click.option("--seed", type=click.IntRange(min=0), help="Random seed (same seed, same bytes).")
 @set_option
 @json_option
 @out_option
@@ -174,12 +184,14 @@ def fuse(sessions, recipe, method, particles, seed, sets, as_json, out_dir) -> N
     Without --method or --recipe the method is pf-constraint, Tao & Hu's layered particle
     filter with the arm-geometry constraint.
     """
-    for folder in _expand(sessions):
+    from armtrack_cli import pipeline
+
+    def work(folder, out):
         r = pipeline.fuse(folder, method=method, particles=particles, seed=seed, recipe=recipe,
-                          sets=sets, out=_out_for(out_dir, folder, sessions))
-        _emit(r, as_json, [f"{folder}: {r['method']}: {r['frames']} frames "
-                           f"({r['detections_used']} with a detection), "
-                           f"{r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"])
+                          sets=sets, out=out)
+        return r, text.fuse_lines(folder, r)
+
+    each(sessions, out_dir, as_json, work)
 
 
 @main.command()
@@ -191,39 +203,59 @@ def fuse(sessions, recipe, method, particles, seed, sets, as_json, out_dir) -> N
 def compare(sessions, methods, as_json, out_dir) -> None:
     """Trajectories scored against Qualisys: errors.csv (per method, joint and axis: mean,
     SD, RMSE, max, % within ±5 cm) and measures.csv; prints Tao & Hu's Table I."""
-    for folder in _expand(sessions):
-        r = pipeline.compare(folder, methods=tuple(methods),
-                             out=_out_for(out_dir, folder, sessions))
-        excl = {k: v for k, v in r["excluded_frames"].items() if v}
-        lines = [f"{folder}:", r["table"]]
-        if excl:
-            lines.append("frames without ground truth (gaps), excluded: " +
-                         ", ".join(f"{k} {v}" for k, v in excl.items()))
-        lines.append(f"-> {r['errors']}, {r['measures']}")
-        r = {k: v for k, v in r.items() if k not in ("rows", "table")}
-        _emit(r, as_json, lines)
+    from armtrack_cli import pipeline
+
+    def work(folder, out):
+        r = pipeline.compare(folder, methods=tuple(methods), out=out)
+        return {k: v for k, v in r.items() if k not in ("rows", "table")}, \
+            text.compare_lines(folder, r)
+
+    each(sessions, out_dir, as_json, work)
 
 
-def _expand(items) -> list[str]:
-    """Session folders: each argument, or the session folders inside a folder of sessions."""
-    out = []
-    for item in items:
-        if os.path.isdir(item) and not os.path.exists(os.path.join(item, "session.toml")):
-            subs = sorted(os.path.join(item, d) for d in os.listdir(item)
-                          if os.path.isfile(os.path.join(item, d, "session.toml")))
-            out.extend(subs or [item])
-        else:
-            out.append(item)
-    return out
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="The PDF to write "
+              "(default: report.pdf in the work folder of the latest session).")
+@json_option
+@out_option
+def report(sessions, output, as_json, out_dir) -> None:
+    """The clinician PDF (A4): page 1 in plain words, trajectories, accuracy against the
+    reference, wrist angles; several sessions of one subject make one report with their
+    progress."""
+    from armtrack_cli import pipeline
+
+    folders = expand(sessions)
+    r = pipeline.report([(f, out_for(out_dir, f, sessions)) for f in folders], output=output)
+    emit(r, as_json, [f"{', '.join(r['sessions'])} -> {r['report']}"])
 
 
-def _out_for(out_dir, folder, sessions) -> str | None:
-    """--out DIR: that folder for one session; DIR/SESSION_NAME for several."""
-    if out_dir is None:
-        return None
-    if len(_expand(sessions)) == 1:
-        return out_dir
-    return os.path.join(out_dir, os.path.basename(str(folder).rstrip("/")))
+@main.command()
+@click.argument("sessions", nargs=-1, required=True, type=click.Path())
+@click.option("--through", type=click.Choice(["calibrate", "detect", "fuse", "compare", "report"]),
+              default="report", show_default=True, help="The last stage to run.")
+@click.option("--method", "methods", type=click.Choice(list(METHODS)), multiple=True,
+              help="Fusion methods (repeatable); default: the recipe's, else the session "
+              "kind's (pf-constraint for arm sessions, ukf-palm for palm sessions).")
+@recipe_option
+@click.option("--seed", type=click.IntRange(min=0), help="Random seed (same seed, same bytes).")
+@set_option
+@click.option("--force", is_flag=True, help="Rerun every stage, even those up to date.")
+@json_option
+@out_option
+def run(sessions, through, methods, recipe, seed, sets, force, as_json, out_dir) -> None:
+    """Every stage of each session in order: calibrate -> detect -> fuse -> compare (when
+    the session has ground truth). A stage runs only when its inputs are newer than its
+    outputs (as make does), so a rerun after a crash or an edit does only what is needed."""
+    from armtrack_cli import pipeline
+
+    def work(folder, out):
+        r = pipeline.run(folder, through=through, methods=tuple(methods), recipe=recipe,
+                         sets=sets, out=out, force=force, seed=seed)
+        summary = {k: v for k, v in r.items() if k != "results"}
+        return summary, text.run_lines(folder, r)
+
+    each(sessions, out_dir, as_json, work)
 
 
 @main.command()
@@ -233,25 +265,27 @@ def _out_for(out_dir, folder, sessions) -> str | None:
               default="circle", show_default=True,
               help="Task: the first four are arm sessions (IMU + patch), wrist-rom and reach-grasp "
               "palm-marker sessions with depth.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Random seed (same seed, "
-              "same bytes).")
-@click.option("--duration", type=click.FloatRange(min=4.0, max=3600.0), default=20.0,
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Random seed (same seed, same bytes).")
+@click.option("--duration", type=Finite(min=4.0, max=3600.0), default=20.0,
               show_default=True, help="Length of the video, s.")
 @click.option("--imu-format", type=click.Choice(["xsens", "csv", "mcap"]), default="xsens",
               show_default=True, help="IMU file written: Xsens MT Manager export, generic CSV, "
               "ROS 2 MCAP.")
 @click.option("--imu-preset", type=click.Choice(["mtw", "consumer", "ideal"]), default="mtw",
               show_default=True, help="IMU error levels: MTw-class, consumer-grade, or none.")
-@click.option("--acc-noise", type=float, help="Override: accelerometer white noise, m/s².")
-@click.option("--acc-bias", type=float, help="Override: accelerometer bias per axis, m/s².")
-@click.option("--gyro-noise", type=float, help="Override: gyro white noise, rad/s.")
-@click.option("--gyro-bias", type=float, help="Override: gyro bias per axis, rad/s.")
-@click.option("--orientation-error", "orientation_rms_deg", type=float,
+@click.option("--acc-noise", type=Finite(0.0, 10.0),
+              help="Override: accelerometer white noise, m/s².")
+@click.option("--acc-bias", type=Finite(0.0, 10.0),
+              help="Override: accelerometer bias per axis, m/s².")
+@click.option("--gyro-noise", type=Finite(0.0, 1.0), help="Override: gyro white noise, rad/s.")
+@click.option("--gyro-bias", type=Finite(0.0, 1.0), help="Override: gyro bias per axis, rad/s.")
+@click.option("--orientation-error", "orientation_rms_deg", type=Finite(0.0, 45.0),
               help="Override: RMS error of the output orientation, degrees.")
-@click.option("--drop-rate", type=click.FloatRange(0.0, 0.5), default=0.0, show_default=True,
+@click.option("--drop-rate", type=Finite(0.0, 0.5), default=0.0, show_default=True,
               help="Fraction of IMU packets dropped, in bursts.")
-@click.option("--fps", type=click.FloatRange(min=1.0, max=240.0), default=30.0, show_default=True)
-@click.option("--imu-rate", type=click.FloatRange(min=20.0, max=1000.0), default=100.0,
+@click.option("--fps", type=Finite(min=1.0, max=240.0), default=30.0, show_default=True)
+@click.option("--imu-rate", type=Finite(min=20.0, max=1000.0), default=100.0,
               show_default=True, help="IMU rate, Hz.")
 @click.option("--qualisys-hz", type=click.Choice(["100", "200"]), default="100", show_default=True)
 @click.option("--gt-gaps", type=click.IntRange(0, 50), default=0, show_default=True,
@@ -277,10 +311,14 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     for spec in occlusions:
         try:
             start, dur = (float(x) for x in spec.split(":"))
+            if not (0 <= start <= 3600 and 0 < dur <= 3600):
+                raise ValueError
         except ValueError:
-            raise click.BadParameter(f"{spec!r} is not START:DURATION",
+            raise click.BadParameter(f"{spec!r} is not START:DURATION (seconds, finite)",
                                      param_hint="--occlusion") from None
         occ.append((start, dur))
+    from armtrack_cli import pipeline
+
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
     if task in ("wrist-rom", "reach-grasp"):
@@ -296,42 +334,10 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
             declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images)
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
     n_frames = int(round(duration * fps))
-    with _progress(n_frames, "rendering", quiet=as_json) as bar:
+    with progress(n_frames, "rendering", quiet=as_json) as bar:
         result = pipeline.simulate(target, settings, imu_format=imu_format, force=force,
                                    on_frame=bar)
-    if as_json:
-        click.echo(json.dumps(result, indent=2, sort_keys=True))
-    else:
-        extra = (f"{result['imu_samples']} IMU samples" if "imu_samples" in result else
-                 f"{result['depth_frames']} depth frames")
-        click.echo(f"wrote {result['session']} ({result['frames']} frames, {extra}, "
-                   f"{result['qualisys_frames']} Qualisys frames) and {result['truth']}")
-
-
-class _progress:
-    """A progress bar on stderr when it is a terminal (quiet in CI, pipes and --json)."""
-
-    def __init__(self, total: int, label: str, *, quiet: bool = False):
-        self.total, self.label = total, label
-        self.enabled = not quiet and sys.stderr.isatty() and not os.environ.get("CI")
-        self.bar = None
-        self.done = 0
-
-    def __enter__(self):
-        if self.enabled:
-            self.bar = click.progressbar(length=self.total, label=self.label, file=sys.stderr)
-            self.bar.__enter__()
-        return self
-
-    def __call__(self, n: int) -> None:
-        if self.bar is not None:
-            self.bar.update(n - self.done)
-        self.done = n
-
-    def __exit__(self, *exc):
-        if self.bar is not None:
-            self.bar.__exit__(*exc)
-        return False
+    emit(result, as_json, text.simulate_lines(result))
 
 
 def render_reference() -> str:
@@ -346,6 +352,3 @@ def render_reference() -> str:
         parts += [f"## armtrack {name}", "", "```", cmd.get_help(ctx), "```", ""]
     return "\n".join(parts)
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -1,0 +1,5 @@
+"""The `armtrack` command line (the only package that imports click)."""
+
+from armtrack_cli.cli.commands import main, render_reference
+
+__all__ = ["main", "render_reference"]

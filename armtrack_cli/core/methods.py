@@ -1,0 +1,18 @@
+"""The fusion methods armtrack knows and what each needs from a session: the one list that
+fuse, info, compare and the command line read."""
+
+from __future__ import annotations
+
+ARM_METHODS = ("inertial", "ekf", "ukf", "pf", "pf-constraint")  # Tao & Hu 2008 and baselines
+PALM_METHODS = ("ukf-palm",)  # Cordella et al.
+METHODS = ARM_METHODS + PALM_METHODS
+BUILT = ARM_METHODS  # methods this version can run
+DEFAULT_METHOD = "pf-constraint"
+
+_CAMERA = ("video", "intrinsics", "board")
+NEEDS = {
+    **{m: ("imu", *_CAMERA, "patch") for m in ARM_METHODS},
+    "pf-constraint": ("imu", *_CAMERA, "patch", "arm"),
+    "ukf-palm": (*_CAMERA, "palm", "depth"),
+}
+DEFAULT_FOR_KIND = {"arm": "pf-constraint", "object": "ukf", "palm": "ukf-palm"}

@@ -1,0 +1,23 @@
+"""Clinical measures of arm and wrist movement, as pure functions of arrays (numpy/scipy).
+
+    signal.py      uniform resampling, gap bridging, low-pass, speed
+    path.py        wrist path: peak/mean speed, time to peak, movement time, path length,
+                   straightness
+    smoothness.py  movement units (Alt Murphy 2011), SPARC (Balasubramanian 2012/2015),
+                   log dimensionless jerk (Balasubramanian 2015, speed form)
+    angles.py      elbow flexion, shoulder elevation and plane (ISB, Wu 2005), forearm
+                   pronation from the IMU, range of motion
+    segments.py    movement segments (laps, reaches) of a repeated task
+    uncertainty.py measures' spread over draws from the filter's posterior
+    table.py       the rows of kinematics-METHOD.csv for one trajectory
+
+A measure that cannot be computed raises ``NotComputable(why)``; ``table`` turns it into a
+"not computable: why" cell, never a number. docs/measures.md defines every measure.
+"""
+
+from armtrack_cli.measures import angles, path, smoothness
+from armtrack_cli.measures.base import NotComputable, Settings
+from armtrack_cli.measures.table import CATALOGUE, Inputs, measure_rows
+
+__all__ = ["NotComputable", "Settings", "CATALOGUE", "Inputs", "measure_rows", "angles", "path",
+           "smoothness"]

@@ -1,0 +1,68 @@
+"""Wrist path measures of one movement (a segment or the whole session).
+
+Onset and offset are where the speed crosses a fraction of its peak (2 %, as in the
+drinking-task protocol of Alt Murphy et al. 2011, Gait Posture 33: 8-13)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armtrack_cli.measures.base import NotComputable, Settings
+
+
+def peak(v: np.ndarray, s: Settings) -> int:
+    """Index of the peak speed; NotComputable when the wrist did not move."""
+    if v.size < 3:
+        raise NotComputable("fewer than 3 samples")
+    k = int(np.argmax(v))
+    if v[k] < s.min_moving_speed:
+        raise NotComputable(f"no movement (peak speed {v[k]:.3f} m/s is below "
+                            f"{s.min_moving_speed} m/s)")
+    return k
+
+
+def onset_offset(v: np.ndarray, s: Settings) -> tuple[int, int]:
+    """Onset: walking back from the first sample at 20 % of peak speed (s.min_segment_peak),
+    the last sample above onset_fraction (2 %) of peak; offset: walking on from the last
+    sample at 20 %, likewise. A noise blip at rest that never reaches 20 % moves neither."""
+    k = peak(v, s)
+    high = np.flatnonzero(v >= s.min_segment_peak * v[k])
+    low = v < s.onset_fraction * v[k]
+    before = np.flatnonzero(low[:high[0]])
+    after = np.flatnonzero(low[high[-1]:])
+    a = before[-1] + 1 if before.size else 0
+    b = high[-1] + after[0] - 1 if after.size else v.size - 1
+    return int(a), int(b)
+
+
+def movement_time(t: np.ndarray, v: np.ndarray, s: Settings) -> float:
+    a, b = onset_offset(v, s)
+    if b - a < 2:
+        raise NotComputable("the movement is shorter than 3 samples")
+    return float(t[b] - t[a])
+
+
+def time_to_peak(t: np.ndarray, v: np.ndarray, s: Settings) -> float:
+    a, _ = onset_offset(v, s)
+    return float(t[peak(v, s)] - t[a])
+
+
+def mean_speed(v: np.ndarray, s: Settings) -> float:
+    """Mean speed between onset and offset."""
+    a, b = onset_offset(v, s)
+    return float(np.mean(v[a:b + 1]))
+
+
+def path_length(p: np.ndarray, v: np.ndarray, s: Settings) -> float:
+    """Sum of the distances between consecutive samples from onset to offset, m."""
+    a, b = onset_offset(v, s)
+    return float(np.sum(np.linalg.norm(np.diff(p[a:b + 1], axis=0), axis=1)))
+
+
+def straightness(p: np.ndarray, v: np.ndarray, s: Settings) -> float:
+    """Path length / straight-line distance from onset to offset (1 = straight)."""
+    a, b = onset_offset(v, s)
+    d = float(np.linalg.norm(p[b] - p[a]))
+    if d < s.min_reach_m:
+        raise NotComputable(f"start and end are {100 * d:.1f} cm apart (a return, not a reach)")
+    return path_length(p, v, s) / d

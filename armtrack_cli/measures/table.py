@@ -1,0 +1,187 @@
+"""The rows of kinematics-METHOD.csv: every measure of one trajectory, per segment and over
+the session, with its unit (and convention) and its uncertainty where the filter gives one."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from armtrack_cli.measures import angles, path, smoothness
+from armtrack_cli.measures.base import DEFAULT, NotComputable, Settings
+from armtrack_cli.measures.segments import segments
+from armtrack_cli.measures.signal import speed_profile
+from armtrack_cli.measures.uncertainty import ar1_draws, spread
+
+REACH_TASKS = ("reach", "reach-grasp")
+ANGLES = {  # name: unit with its convention
+    "elbow_flexion": "deg (0 = full extension)",
+    "shoulder_elevation": "deg (ISB Y-X-Y, trunk = W; 0 = arm down)",
+    "shoulder_plane": "deg (ISB Y-X-Y, trunk = W; 0 = abduction, 90 = flexion)",
+    "forearm_pronation": "deg (IMU, from the first second; + pronation)",
+    "wrist_flexion": "deg (+ palmar flexion)",
+    "wrist_deviation": "deg (+ radial deviation)",
+    "wrist_pronation": "deg (+ pronation)",
+}
+PATH = {  # name: unit
+    "wrist_peak_speed": "m/s", "wrist_mean_speed": "m/s", "time_to_peak_speed": "s",
+    "movement_time": "s (onset/offset at 2 % of peak speed)", "wrist_path_length": "m",
+    "movement_units": "count (rise > 20 mm/s, peaks >= 150 ms apart)",
+    "sparc": "1 (SPARC, 10 Hz, threshold 0.05; 0 = smoothest)",
+    "ldlj": "1 (log dimensionless jerk, speed form T^3/v_peak^2)",
+    "straightness": "1 (path length / straight-line distance)",
+}
+CATALOGUE = {**PATH, "segments": "count",
+             **{f"{a}_{k}": u for a, u in ANGLES.items() for k in ("rom", "rom_p5_p95", "min", "max")}}
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """One trajectory on the session clock. Positions (N, 3) m in W; angles (N, 3) deg."""
+
+    t: np.ndarray
+    wrist: np.ndarray
+    task: str = ""
+    side: str = "right"
+    elbow: np.ndarray | None = None
+    shoulder: np.ndarray | None = None  # (3,) fixed, or (N, 3)
+    q_WB: np.ndarray | None = None  # (N, 4) IMU orientation, for forearm pronation
+    forearm_axis: np.ndarray | None = None  # (3,) in B
+    wrist_angles: np.ndarray | None = None  # (N, 3) flexion, deviation, pronation
+    wrist_sd: np.ndarray | None = None  # (N, 3) posterior SD of the wrist, m
+    angles_sd: np.ndarray | None = None  # (N, 3) posterior SD of wrist_angles, deg
+
+
+Value = float | str  # a number, or "not computable: why"
+
+
+def _try(f: Callable[[], float]) -> Value:
+    try:
+        v = f()
+    except NotComputable as exc:
+        return f"not computable: {exc}"
+    return float(v) if np.isfinite(v) else "not computable: no finite value"
+
+
+def _path_values(t, p, v, fs: float, reach: bool, s: Settings) -> dict[str, Value]:
+    def moving() -> np.ndarray:
+        a, b = path.onset_offset(v, s)
+        return v[a:b + 1]
+
+    out = {
+        "wrist_peak_speed": _try(lambda: v[path.peak(v, s)]),
+        "wrist_mean_speed": _try(lambda: path.mean_speed(v, s)),
+        "time_to_peak_speed": _try(lambda: path.time_to_peak(t, v, s)),
+        "movement_time": _try(lambda: path.movement_time(t, v, s)),
+        "wrist_path_length": _try(lambda: path.path_length(p, v, s)),
+        "movement_units": _try(lambda: smoothness.movement_units(t, moving(), s)[0]),
+        "sparc": _try(lambda: smoothness.sparc(moving(), fs, s)),
+        "ldlj": _try(lambda: smoothness.ldlj(moving(), fs)),
+    }
+    if reach:
+        out["straightness"] = _try(lambda: path.straightness(p, v, s))
+    return out
+
+
+def path_values(inp: Inputs, s: Settings, windows: list | None = None
+                ) -> tuple[dict[tuple[str, str], Value], list]:
+    """({(measure, segment): value}, segment windows); segment "session" or "1", "2", …
+    Given windows (from the estimate), posterior draws are measured on the same segments."""
+    reach = inp.task in REACH_TASKS
+    try:
+        t, p, v = speed_profile(inp.t, inp.wrist, s)
+    except NotComputable as exc:
+        why = f"not computable: {exc}"
+        return {(k, "session"): why for k in PATH if k != "straightness" or reach}, []
+    fs = 1.0 / (t[1] - t[0])
+    out = {(k, "session"): x for k, x in _path_values(t, p, v, fs, False, s).items()}
+    own = segments(t, v, s)
+    out[("segments", "session")] = float(len(own))  # always this signal's own count
+    if windows is None:  # windows in session time, so other samplings use the same segments
+        windows = [(t[a], t[b - 1]) for a, b in own]
+    segs = [(int(np.searchsorted(t, a - 1e-9)), int(np.searchsorted(t, b + 1e-9)))
+            for a, b in windows]
+    if len(segs) > 1:
+        out[("time_to_peak_speed", "session")] = (f"not computable: {len(segs)} movements "
+                                                  "(see each segment)")
+    for n, (a, b) in enumerate(segs if len(segs) > 1 else [], 1):
+        for k, x in _path_values(t[a:b], p[a:b], v[a:b], fs, reach, s).items():
+            out[(k, str(n))] = x
+    return out, windows
+
+
+def angle_series(inp: Inputs, s: Settings) -> dict[str, np.ndarray | str]:
+    """Each angle over time (deg), or why it cannot be had from these inputs."""
+    out: dict[str, np.ndarray | str] = {}
+    if inp.elbow is not None and inp.shoulder is not None:
+        sh = np.broadcast_to(inp.shoulder, inp.elbow.shape)
+        out["elbow_flexion"] = angles.elbow_flexion_deg(sh, inp.elbow, inp.wrist)
+        out["shoulder_elevation"], out["shoulder_plane"] = angles.shoulder_angles_deg(
+            sh, inp.elbow, inp.side, s)
+    if inp.q_WB is not None and inp.forearm_axis is not None:
+        try:
+            out["forearm_pronation"] = angles.forearm_pronation_deg(inp.t, inp.q_WB,
+                                                                    inp.forearm_axis, inp.side, s)
+        except NotComputable as exc:
+            out["forearm_pronation"] = str(exc)
+    if inp.wrist_angles is not None:
+        for k, name in enumerate(("wrist_flexion", "wrist_deviation", "wrist_pronation")):
+            out[name] = inp.wrist_angles[:, k]
+    return out
+
+
+def angle_values(inp: Inputs, s: Settings) -> dict[tuple[str, str], Value]:
+    out: dict[tuple[str, str], Value] = {}
+    for name, x in angle_series(inp, s).items():
+        try:
+            r = angles.rom(x) if not isinstance(x, str) else None
+        except NotComputable as exc:
+            x = str(exc)
+        for k in ("rom", "rom_p5_p95", "min", "max"):
+            out[(f"{name}_{k}", "session")] = r[k] if not isinstance(x, str) else f"not computable: {x}"
+    return out
+
+
+def values(inp: Inputs, s: Settings, windows: list | None = None
+           ) -> tuple[dict[tuple[str, str], Value], list]:
+    vals, segs = path_values(inp, s, windows)
+    return {**vals, **angle_values(inp, s)}, segs
+
+
+def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[str, str], float]:
+    """SD of every measure over draws from the posterior (uncertainty.py)."""
+    if inp.wrist_sd is None and inp.angles_sd is None:
+        return {}
+    e_w = ar1_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else None
+    e_a = (ar1_draws(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
+           if inp.angles_sd is not None else None)
+    draws = []
+    for i in range(s.draws):
+        d = inp
+        if e_w is not None:  # the elbow is the wrist moved by a known vector: the same error
+            d = replace(d, wrist=inp.wrist + e_w[i],
+                        elbow=None if inp.elbow is None else inp.elbow + e_w[i])
+        if e_a is not None:
+            d = replace(d, wrist_angles=inp.wrist_angles + e_a[i])
+        draws.append(values(d, s, windows)[0])
+    return {k: spread([dr.get(k, "") for dr in draws]) for k in keys}
+
+
+def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None) -> list[dict]:
+    """[{measure, segment, value, sd, unit, t_start, t_end}]: value a float or "not computable:
+    why"; sd the posterior uncertainty (NaN where the filter gives no SD or the draws do not
+    support one); t_start, t_end the segment's window in session time (s). Given windows
+    (e.g. the estimate's, for the ground truth), the segments are those."""
+    vals, windows = values(inp, s, windows)
+    fixed = ("segments",) + tuple(f"forearm_pronation_{k}" for k in ("rom", "rom_p5_p95", "min", "max"))
+    sds = _uncertainty(inp, [k for k, v in vals.items() if not isinstance(v, str)
+                             and k[0] not in fixed], windows, s)  # no posterior for these
+    order = {k: i for i, k in enumerate(CATALOGUE)}
+    keys = sorted(vals, key=lambda k: (k[1] != "session", int(k[1]) if k[1].isdigit() else 0,
+                                       order[k[0]]))
+    span = {str(n): w for n, w in enumerate(windows, 1)}
+    span["session"] = (float(np.nanmin(inp.t)), float(np.nanmax(inp.t)))
+    return [{"measure": m, "segment": seg, "value": vals[(m, seg)],
+             "sd": sds.get((m, seg), float("nan")), "unit": CATALOGUE[m],
+             "t_start": float(span[seg][0]), "t_end": float(span[seg][1])} for m, seg in keys]

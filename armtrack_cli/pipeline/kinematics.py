@@ -1,0 +1,90 @@
+"""The clinical measures of a trajectory (fuse) and of the ground truth beside them (compare),
+computed by ``armtrack_cli.measures``; this module only gathers their inputs from the session
+and lays out the tables."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from armtrack_cli.measures import CATALOGUE, Inputs, measure_rows
+from armtrack_cli.measures.angles import hand_frames, wrist_angles_deg
+from armtrack_cli.session.config import Session
+
+XYZ = ("x", "y", "z")
+WRIST_ANGLES = ("flexion_deg", "deviation_deg", "pronation_deg")
+
+
+def _cols(traj: pd.DataFrame, names) -> np.ndarray | None:
+    return traj[list(names)].to_numpy(dtype=float) if all(c in traj for c in names) else None
+
+
+def trajectory_inputs(traj: pd.DataFrame, session: Session, *,
+                      q_WB: np.ndarray | None = None) -> Inputs:
+    """A trajectory-METHOD.csv table (+ the IMU orientation at its frames, when fuse has it)."""
+    arm, imu = session.arm, session.imu
+    ang_sd = _cols(traj, [f"{a}_sd" for a in WRIST_ANGLES])
+    return Inputs(
+        t=traj["t"].to_numpy(dtype=float), wrist=_cols(traj, [f"wrist_{a}" for a in XYZ]),
+        task=session.meta.task or "", side=session.meta.side,
+        elbow=_cols(traj, [f"elbow_{a}" for a in XYZ]),
+        shoulder=None if arm is None else np.asarray(arm.shoulder_m, float),
+        q_WB=q_WB, forearm_axis=None if imu is None else imu.forearm_unit,
+        wrist_angles=_cols(traj, WRIST_ANGLES),
+        wrist_sd=_cols(traj, [f"wrist_{a}_sd" for a in XYZ]), angles_sd=ang_sd)
+
+
+def _cell(v) -> str:
+    return v if isinstance(v, str) else f"{v:.6f}"
+
+
+def kinematics_table(traj: pd.DataFrame, session: Session, *,
+                     q_WB: np.ndarray | None = None) -> pd.DataFrame:
+    """kinematics-METHOD.csv: measure, segment, value (a number or "not computable: why"),
+    sd (posterior uncertainty), unit (with the angle's convention)."""
+    rows = measure_rows(trajectory_inputs(traj, session, q_WB=q_WB))
+    return pd.DataFrame([{**r, "value": _cell(r["value"])} for r in rows],
+                        columns=["measure", "segment", "value", "sd", "unit", "t_start", "t_end"])
+
+
+def truth_inputs(est: Inputs, session: Session, truth: dict[str, np.ndarray]) -> Inputs | None:
+    """The ground truth's markers (role -> (N, 3) at the trajectory's frames) as Inputs, on the
+    frames where the estimate exists; None when no wrist marker is named."""
+    mask = np.isfinite(est.wrist).all(axis=1)[:, None]
+    cut = {k: np.where(mask, v, np.nan) for k, v in truth.items()}
+    if "wrist" in cut:  # arm sessions: the shoulder marker if named, else the model's
+        return Inputs(t=est.t, wrist=cut["wrist"], task=est.task, side=est.side,
+                      elbow=cut.get("elbow") if est.elbow is not None else None,
+                      shoulder=cut.get("shoulder", est.shoulder))
+    if {"WRIST", "MCP3", "CMC1"} <= set(cut):  # palm sessions: the hand frame from markers
+        ang = None
+        if est.wrist_angles is not None:
+            R = hand_frames(cut["WRIST"], cut["MCP3"], cut["CMC1"], est.side)
+            ang = wrist_angles_deg(est.t, R, est.side)
+        return Inputs(t=est.t, wrist=cut["WRIST"], task=est.task, side=est.side, wrist_angles=ang)
+    return None
+
+
+def _number(v) -> float:
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
+def measure_comparison(method: str, est: pd.DataFrame, truth: Inputs | None) -> list[dict]:
+    """measures.csv rows: each estimated measure (from kinematics-METHOD.csv) with the same
+    measure of the ground truth, the error (estimate − truth) and the error in % of truth."""
+    win = est[est["segment"] != "session"].groupby("segment", sort=False)[["t_start", "t_end"]].first()
+    windows = [tuple(w) for w in win.to_numpy()] if len(win) else None  # the estimate's segments
+    t_rows = ({(r["measure"], r["segment"]): r["value"] for r in measure_rows(truth, windows=windows)}
+              if truth else {})
+    out = []
+    for r in est.itertuples(index=False):
+        tv = t_rows.get((r.measure, r.segment), "not computable: the reference does not give this measure")
+        e, t = _number(r.value), _number(tv)
+        out.append({"method": method, "measure": r.measure, "segment": r.segment,
+                    "unit": CATALOGUE.get(r.measure, r.unit), "estimate": r.value,
+                    "estimate_sd": r.sd, "truth": _cell(tv), "error": e - t,
+                    "error_pct": 100 * (e - t) / abs(t) if t else float("nan")})
+    return out

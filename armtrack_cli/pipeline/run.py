@@ -1,0 +1,124 @@
+"""The whole chain for one session: calibrate -> detect -> fuse -> compare (-> report), each
+stage only when its inputs exist and are newer than its outputs, as make does; --force reruns.
+A recipe file counts as an input of the stages that read it; --set values always rerun them."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from armtrack_cli.calibrate.board_pose import CalibrateSettings
+from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core.methods import BUILT, DEFAULT_FOR_KIND, METHODS
+from armtrack_cli.detect.palm_blobs import PalmBlobSettings
+from armtrack_cli.detect.patch_tracker import PatchSettings
+from armtrack_cli.pipeline.calibrate import calibrate
+from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.compare import compare
+from armtrack_cli.pipeline.detect import detect
+from armtrack_cli.pipeline.fuse import fuse, settings_for
+from armtrack_cli.pipeline.report import report
+from armtrack_cli.session.config import Session, load_session
+from armtrack_cli.session.depth import depth_path
+from armtrack_cli.session.recipe import recipe_file, section
+from armtrack_cli.session.workfolder import WorkFolder, newest
+
+STAGES = ("calibrate", "detect", "fuse", "compare", "report")
+
+
+@dataclass(frozen=True)
+class Step:
+    name: str  # "fuse ekf" for one method's fuse
+    inputs: tuple  # session files and earlier outputs (None = not declared: always run)
+    outputs: tuple[str, ...]  # in the work folder
+    call: Callable[[], dict[str, Any]]
+    settings: bool = False  # reads the recipe and --set
+
+
+def _methods(session: Session, methods, recipe, sets) -> tuple[str, ...]:
+    if methods:
+        unknown = [m for m in methods if m not in METHODS]
+        if unknown:
+            raise ConfigError("--method", f"{unknown[0]!r} is not a method",
+                              f"methods are {', '.join(METHODS)}")
+        return tuple(methods)
+    if recipe is not None:
+        return (settings_for(recipe, sets)[0].method,)
+    return (DEFAULT_FOR_KIND[session.kind],)
+
+
+def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe, sets,
+         seed: int | None) -> list[Step]:
+    """The steps for this session, in order; a stage whose section is absent is left out."""
+    cam = session.camera
+    toml, rec = session.toml_path, recipe_file(recipe)
+    video = cam.video if cam is not None else None
+    steps = [Step("calibrate", (toml, video, cam.intrinsics if cam else None,
+                                depth_path(session.root, 0) if session.palm else toml),
+                  ("camera.yaml",) + (("palm.toml",) if session.palm else ()),
+                  lambda: calibrate(session.root, out=work.path, recipe=recipe, sets=sets), True),
+             Step("detect", (toml, video), ("detections.csv",),
+                  lambda: detect(session.root, out=work.path, recipe=recipe, sets=sets), True)]
+    for m in methods:
+        imu = session.imu.file if session.imu is not None else None
+        steps.append(Step(f"fuse {m}", (toml, imu, work / "camera.yaml", work / "detections.csv"),
+                          (f"trajectory-{m}.csv", f"kinematics-{m}.csv"),
+                          lambda m=m: fuse(session.root, method=m, seed=seed, recipe=recipe,
+                                           sets=sets, out=work.path), True))
+    if session.groundtruth is not None and methods:
+        traj = tuple(work / f"{k}-{m}.csv" for m in methods for k in ("trajectory", "kinematics"))
+        steps.append(Step("compare", (toml, session.groundtruth.file, *traj),
+                          ("errors.csv", "measures.csv"),
+                          lambda: compare(session.root, methods=methods, out=work.path)))
+    made = tuple(work / n for st in steps[2:] for n in st.outputs)  # fuse's and compare's
+    steps.append(Step("report", (toml, *made), ("report.pdf",),
+                      lambda: report([(session.root, work.path)])))
+    return [s if not (s.settings and rec) else Step(s.name, (*s.inputs, rec), s.outputs, s.call,
+                                                    s.settings) for s in steps]
+
+
+def check_settings(recipe: str | None, sets: tuple[str, ...]) -> None:
+    """Every stage's settings from the recipe and --set, checked before any stage runs, so a
+    bad value stops the run before it has rewritten anything."""
+    doc, where = resolve_recipe(recipe, sets)
+    for name, cls in (("calibrate", CalibrateSettings), ("detect.patch", PatchSettings),
+                      ("detect.palm", PalmBlobSettings)):
+        section(doc, name, cls, where)
+    settings_for(recipe, sets)
+
+
+def _stale(step: Step, work: WorkFolder, *, force: bool, sets) -> bool:
+    if force or (step.settings and sets) or any(p is None for p in step.inputs):
+        return True
+    made, needed = work.oldest(step.outputs), newest(step.inputs)
+    return made is None or needed is None or needed > made
+
+
+def run(session: str | Path, *, through: str = "report", methods: tuple[str, ...] = (),
+        recipe: str | None = None, sets: tuple[str, ...] = (), out: str | Path | None = None,
+        force: bool = False, seed: int | None = None) -> dict[str, Any]:
+    """Every stage of one session through ``through``; returns what each stage did."""
+    if through not in STAGES:
+        raise ConfigError("--through", f"{through!r} is not a stage", f"stages are {', '.join(STAGES)}")
+    s = load_session(session)
+    check_settings(recipe, sets)
+    work = WorkFolder(out_dir(s, out))
+    chosen = _methods(s, methods, recipe, sets)
+    last = STAGES.index(through)
+    stages, results = {}, {}
+    for step in plan(s, work, methods=tuple(m for m in chosen if m in BUILT), recipe=recipe,
+                     sets=sets, seed=seed):
+        if STAGES.index(step.name.split()[0]) > last:
+            break
+        if _stale(step, work, force=force, sets=sets):
+            results[step.name] = step.call()
+            stages[step.name] = "ran"
+        else:
+            stages[step.name] = "up to date"
+    for m in chosen:
+        if m not in BUILT:
+            stages[f"fuse {m}"] = "not in this version yet"
+    return {"session": str(s.root), "out": str(work.path), "methods": list(chosen),
+            "stages": stages, "results": results}

@@ -1,0 +1,121 @@
+"""Page 1: who and what, the key measures in plain words, the data quality and the verdict."""
+
+from __future__ import annotations
+
+import math
+
+from armtrack_cli.report import layout, words
+from armtrack_cli.report.data import SessionReport
+from armtrack_cli.report.quality import verdict
+
+ARM_ANGLES = ("elbow_flexion", "shoulder_elevation", "shoulder_plane", "forearm_pronation")
+PALM_ANGLES = ("wrist_flexion", "wrist_deviation", "wrist_pronation")
+PLAIN = {"movement_units": "movement units (sub-movements; fewer = smoother)",
+         "sparc": "smoothness, SPARC (nearer 0 = smoother)",
+         "segments": "separate movements found"}
+PATH = ("wrist_peak_speed", "wrist_mean_speed", "movement_time", "wrist_path_length",
+        "movement_units", "sparc", "segments")
+
+
+def lookup(r: SessionReport, measure: str, segment: str = "session") -> tuple[str | None, float]:
+    """(value cell, sd) of a measure in kinematics-METHOD.csv; (None, nan) if absent."""
+    k = r.kinematics
+    if k is None:
+        return None, float("nan")
+    row = k[(k["measure"] == measure) & (k["segment"] == segment)]
+    if not len(row):
+        return None, float("nan")
+    return str(row["value"].iloc[0]), float(row["sd"].iloc[0])
+
+
+def value_text(r: SessionReport, measure: str, segment: str = "session") -> str | None:
+    """'50.2° ± 2.2°' / '0.214 m/s ± 0.026 m/s' / 'not computable: why'; None if absent."""
+    v, sd = lookup(r, measure, segment)
+    if v is None:
+        return None
+    if v.startswith("not computable"):
+        return v
+    out = words.with_unit(v, measure)
+    if math.isfinite(sd):
+        out += f" ± {words.with_unit(sd, measure)}"
+    return out
+
+
+def angle_line(r: SessionReport, angle: str) -> str | None:
+    rom = value_text(r, f"{angle}_rom")
+    if rom is None:
+        return None
+    if rom.startswith("not computable"):
+        return f"{words.ANGLES[angle]}: {rom}"
+    lo, _ = lookup(r, f"{angle}_min")
+    hi, _ = lookup(r, f"{angle}_max")
+    return (f"{words.ANGLES[angle]}: range {rom}, from {words.with_unit(lo, f'{angle}_min')} "
+            f"to {words.with_unit(hi, f'{angle}_max')}")
+
+
+def key_lines(r: SessionReport) -> list[str]:
+    out = []
+    for a in (PALM_ANGLES if r.kind == "palm" else ARM_ANGLES):
+        line = angle_line(r, a)
+        if line:
+            out.append(line)
+    for m in PATH:
+        v = value_text(r, m)
+        if v is not None:
+            out.append(f"{PLAIN.get(m, words.name(m))}: {v}")
+    return out or ["no measures: " + ("; ".join(r.notes) or "no movement estimate")]
+
+
+def quality_lines(r: SessionReport) -> list[str]:
+    q = r.quality
+    out = []
+    if math.isfinite(q.tracked_pct):
+        out.append(f"frames in which the camera found the {'hand markers' if r.kind == 'palm' else 'wrist'}: "
+                   f"{q.tracked_pct:.1f} % of {q.frames}")
+    if q.imu_samples is not None:
+        out.append(f"motion sensor: {q.imu_samples} samples, {q.imu_dropped or 0} lost, "
+                   f"{q.imu_gaps or 0} gaps, longest interval {q.imu_longest_gap_s:.3f} s")
+    if math.isfinite(q.reprojection_px):
+        out.append(f"camera calibration reprojection error: {q.reprojection_px:.2f} px")
+    offs = []
+    for what, off in (("motion sensor", q.imu_offset_s), ("reference system", q.groundtruth_offset_s)):
+        if off is not None:
+            offs.append(f"{what} {off}" if isinstance(off, str)
+                        else f"{what} {off:+.3f} s".replace("-", "−"))
+    if offs:
+        out.append("time offsets used: " + ", ".join(offs))
+    if r.errors is not None and r.method is not None:
+        e = r.errors[(r.errors["method"] == r.method) & (r.errors["joint"] == "wrist")
+                     & (r.errors["axis"] == "3d")]
+        if len(e):
+            out.append(f"wrist error against the reference motion capture: "
+                       f"{e['rmse_cm'].iloc[0]:.2f} cm RMS, {e['within_5cm_pct'].iloc[0]:.1f} % "
+                       "of frames within 5 cm")
+    return out
+
+
+def page_one(r: SessionReport):
+    def draw(fig):
+        y = layout.text_block(fig, 0.07, 0.90, [
+            f"Subject: {r.subject}        Session: {r.session_id}        Date: {r.date or 'not recorded'}",
+            f"Task: {words.task_name(r.task)}        Side: {r.side} {'hand' if r.kind == 'palm' else 'arm'}",
+            f"Tracking method: {words.method_name(r.method, source=True)}"
+            + (f", named {r.method} in the tables" if r.method else ""),
+        ], size=10, step=0.022)
+        fig.text(0.07, y - 0.01, "Key measures (± the uncertainty the tracking gives)",
+                 fontsize=11.5, weight="bold", va="top")
+        y = layout.text_block(fig, 0.09, y - 0.04, key_lines(r), size=9.5, step=0.02)
+        fig.text(0.07, y - 0.015, "Data quality", fontsize=11.5, weight="bold", va="top")
+        y = layout.text_block(fig, 0.09, y - 0.045, quality_lines(r), size=9.5, step=0.02)
+        v, reasons = verdict(r)
+        fig.text(0.07, y - 0.02, f"Verdict: {v}", fontsize=13, weight="bold", va="top")
+        y = layout.text_block(fig, 0.09, y - 0.055, [f"• {x}" for x in reasons], size=9.5, step=0.02)
+        layout.text_block(fig, 0.07, 0.10, [
+            "How to read this: ranges of motion are the largest minus the smallest angle seen; the",
+            "5th-95th percentile range ignores brief extremes. Movement time starts and ends where the",
+            "hand speed crosses 2 % of its peak. Fewer movement units and smoothness values nearer 0",
+            "mean smoother movement. Verdict thresholds: under 90 % of frames tracked, calibration",
+            "error over 1 px, motion-sensor gaps over 0.1 s or wrist error over 5 cm ask for care.",
+        ], size=8, step=0.015, color="0.25")
+
+    return "Movement report", draw

@@ -1,0 +1,85 @@
+"""Plain names, units and number formats: one rule shared by every page (and the tests)."""
+
+from __future__ import annotations
+
+import math
+
+METHODS = {  # short plain names for tables; page 1 adds the source
+    "inertial": "inertial sensor only",
+    "ekf": "extended Kalman filter",
+    "ukf": "unscented Kalman filter",
+    "pf": "particle filter",
+    "pf-constraint": "particle filter with arm constraint",
+    "ukf-palm": "palm-marker Kalman filter",
+}
+SOURCES = {"pf-constraint": "Tao & Hu 2008", "ekf": "Tao & Hu 2008", "pf": "Tao & Hu 2008",
+           "inertial": "Tao & Hu 2008", "ukf-palm": "Cordella et al."}
+TASKS = {"circle": "circles on the table", "rectangle": "rectangles on the table",
+         "reach": "reaching forward and back", "figure8": "figures of eight on the table",
+         "wrist-rom": "wrist range of motion", "reach-grasp": "reach and grasp"}
+
+# measure: (plain name, display unit, decimals); values are shown in the CSV's own unit
+MEASURES = {
+    "wrist_peak_speed": ("peak hand speed", "m/s", 3),
+    "wrist_mean_speed": ("mean hand speed while moving", "m/s", 3),
+    "time_to_peak_speed": ("time to peak speed", "s", 2),
+    "movement_time": ("movement time", "s", 2),
+    "wrist_path_length": ("hand path length", "m", 3),
+    "movement_units": ("movement units", "", 0),
+    "sparc": ("smoothness, SPARC", "", 2),
+    "ldlj": ("smoothness, log dimensionless jerk", "", 2),
+    "straightness": ("path / straight distance", "", 2),
+    "segments": ("movements found", "", 0),
+}
+ANGLES = {  # the convention in words, for page 1
+    "elbow_flexion": "elbow flexion (0° = straight arm)",
+    "shoulder_elevation": "shoulder elevation (0° = arm hanging down)",
+    "shoulder_plane": "plane of elevation (0° = out to the side, 90° = forward)",
+    "forearm_pronation": "forearm rotation (+ pronation, palm down; − supination)",
+    "wrist_flexion": "wrist flexion (+ towards the palm; − extension)",
+    "wrist_deviation": "wrist deviation (+ radial, thumb side; − ulnar)",
+    "wrist_pronation": "hand pronation (+ palm down; − supination)",
+}
+SHORT = {"elbow_flexion": "elbow flexion", "shoulder_elevation": "shoulder elevation",
+         "shoulder_plane": "plane of elevation", "forearm_pronation": "forearm pronation",
+         "wrist_flexion": "wrist flexion", "wrist_deviation": "wrist deviation",
+         "wrist_pronation": "hand pronation"}
+PARTS = {"rom": "range", "rom_p5_p95": "range 5th-95th pct", "min": "least", "max": "most"}
+for _a, _w in SHORT.items():
+    for _k, _p in PARTS.items():
+        MEASURES[f"{_a}_{_k}"] = (f"{_w}: {_p}", "°", 1)
+
+
+def name(measure: str) -> str:
+    return MEASURES.get(measure, (measure.replace("_", " "), "", 3))[0]
+
+
+def number(value, measure: str) -> str:
+    """The value as the report prints it (no unit): the measure's decimals, "−" for minus."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return "not computable"
+    if not math.isfinite(v):
+        return "not computable"
+    d = MEASURES.get(measure, ("", "", 3))[2]
+    return f"{v:.{d}f}".replace("-", "−")
+
+
+def with_unit(value, measure: str) -> str:
+    s = number(value, measure)
+    unit = MEASURES.get(measure, ("", "", 3))[1]
+    if s == "not computable" or not unit:
+        return s
+    return s + unit if unit == "°" else f"{s} {unit}"
+
+
+def method_name(method: str | None, *, source: bool = False) -> str:
+    if method is None:
+        return "no estimate"
+    name = METHODS.get(method, method)
+    return f"{name} ({SOURCES[method]})" if source and method in SOURCES else name
+
+
+def task_name(task: str) -> str:
+    return TASKS.get(task, task or "not stated")
