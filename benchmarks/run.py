@@ -79,7 +79,7 @@ def prepared(tmp: str):
     pipeline.detect(folder, out=out)
     s, _ = settings_for(None, (), method="pf-constraint", seed=0)
     prep = prepare(load_session(folder), out, s)
-    frames, inp, proj, arm = prep.frames, prep.inputs, prep.projection, prep.arm
+    inp, proj, arm = prep.inputs, prep.projection, prep.arm
     x0 = np.zeros(6)
     x0[:3], _ = initial_wrist(proj, inp.z[0], arm=arm, q_WB=inp.q_WB[0], plane_height_m=0.07)
     P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
