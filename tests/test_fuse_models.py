@@ -45,7 +45,7 @@ def test_composite_steps_equal_sequential_integration():
     t_imu = np.sort(rng.uniform(0, 2, 150))
     a = rng.normal(0, 1, (150, 3))
     t_f = np.r_[0.05, np.sort(rng.uniform(0.06, 1.9, 40))]
-    steps = models.composite_steps(t_imu, a, t_f, 0.5, 0.01)
+    steps = models.composite_steps(t_imu, a, t_f, accel_noise=0.5, imu_period=0.01)
     x = np.r_[0.1, 0.2, 0.3, 0.01, -0.02, 0.03]
     seq = x.copy()
     for k in range(1, t_f.size):
@@ -71,7 +71,8 @@ def test_start_picks_the_intersection_near_the_table():
     for name in kinematics.TASKS:
         task = kinematics.Task(name, 12.0, np.array([0.26, 0.25, 0.07]), 0.1)
         s = kinematics.arm_state(arm_geo, task, np.array([0.0]))
-        arm = models.Arm(arm_geo.shoulder, 0.31, 0.27, np.array([0.0, 1.0, 0.0]))
+        arm = models.Arm(shoulder=arm_geo.shoulder, L1=0.31, L2=0.27,
+                         forearm_B=np.array([0.0, 1.0, 0.0]))
         uv = PROJ(s.wrist[0])
         p, how = models.initial_wrist(PROJ, uv, arm=arm, q_WB=s.q_WB[0], plane_height_m=0.07)
         assert np.linalg.norm(p - s.wrist[0]) < 1e-6, (name, p, s.wrist[0])

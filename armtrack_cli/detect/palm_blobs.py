@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 
 from armtrack_cli.detect.colour import hs_histogram, range_mask
+from armtrack_cli.detect.regions import Regions
 
 SKIN_YCRCB = ((0, 135, 80), (255, 175, 130))  # Cr 135-175, Cb 80-130 (Chai & Ngan style bounds)
 
@@ -38,7 +39,8 @@ def hand_roi(bgr: np.ndarray, margin: float) -> tuple[int, int, int, int] | None
     The region is found at half resolution: only its box is needed, and it is grown anyway."""
     small = cv2.resize(bgr, (bgr.shape[1] // 2, bgr.shape[0] // 2), interpolation=cv2.INTER_AREA)
     m = cv2.morphologyEx(skin_mask(small), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    n, _, stats, _ = cv2.connectedComponentsWithStats(m, 8)
+    regions = Regions(m)
+    n, stats = regions.n, regions.stats
     if n < 2:
         return None
     k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
@@ -71,14 +73,15 @@ class PalmBlobDetector:
                 return np.zeros((0, 4))
             self.reference = hs_histogram(hsv, ref_mask)
         cand = self._candidates_mask(hsv)
-        n, labels, stats, _ = cv2.connectedComponentsWithStats(cand, 8)
+        regions = Regions(cand)
+        n, stats = regions.n, regions.stats
         rows = []
         for k in range(1, n):
             area = int(stats[k, cv2.CC_STAT_AREA])
             if area < self.s.min_area_px:
                 continue
             x, y, w, h = (int(v) for v in stats[k, :4])
-            sub = (labels[y:y + h, x:x + w] == k).astype(np.uint8)
+            sub = regions.mask_of(k)
             hist = hs_histogram(hsv[y:y + h, x:x + w], sub * 255)
             score = 1.0 - cv2.compareHist(self.reference, hist, cv2.HISTCMP_BHATTACHARYYA)
             if score < self.s.min_score:

@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from armtrack_cli.detect.colour import hue_histogram
+from armtrack_cli.detect.colour import hue_histogram, range_mask
+from armtrack_cli.detect.regions import Regions
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
 _OPEN = np.ones((3, 3), np.uint8)
@@ -53,6 +54,23 @@ def back_projection(hsv: np.ndarray, hist: np.ndarray, low, high) -> np.ndarray:
     return cv2.morphologyEx(cv2.bitwise_and(bp, sv), cv2.MORPH_OPEN, _OPEN)
 
 
+def patch_mask(hsv: np.ndarray, low, high) -> np.ndarray:
+    """back_projection with the patch's histogram (255 on its hue range, 0 elsewhere:
+    colour.hue_histogram) in one pass: the back-projection is then 255 exactly where the hue
+    is in range, so masked by S and V it is the HSV range mask. The opening (3 x 3) is done on
+    the box around the mask's pixels grown by 2 px, outside which it is 0 anyway (tests check
+    the equality with back_projection)."""
+    raw = range_mask(hsv, low, high)
+    x, y, w, h = cv2.boundingRect(raw)
+    if w == 0:
+        return raw
+    H, W = raw.shape
+    y0, y1, x0, x1 = max(0, y - 2), min(H, y + h + 2), max(0, x - 2), min(W, x + w + 2)
+    out = np.zeros_like(raw)
+    out[y0:y1, x0:x1] = cv2.morphologyEx(raw[y0:y1, x0:x1], cv2.MORPH_OPEN, _OPEN)
+    return out
+
+
 class PatchTracker:
     """Feed frames in order with ``step``; read per-frame detections with ``detections``."""
 
@@ -65,8 +83,9 @@ class PatchTracker:
 
     def step(self, frame_index: int, bgr: np.ndarray) -> None:
         hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
-        bp = back_projection(hsv, self.hist, self.low, self.high)
-        n, labels, stats, _ = cv2.connectedComponentsWithStats((bp > 0).astype(np.uint8), 8)
+        bp = patch_mask(hsv, self.low, self.high)
+        regions = Regions(bp)
+        n, stats = regions.n, regions.stats
         claimed: dict[int, Tracklet] = {}
         h, w = bp.shape
         for tr in self.active:
@@ -76,7 +95,7 @@ class PatchTracker:
             mass = float(bp[y:y + wh, x:x + ww].sum()) / 255.0 if ww > 0 and wh > 0 else 0.0
             ref = np.median(tr.masses[-30:]) if tr.masses else mass
             inside = 0 <= cx < w and 0 <= cy < h
-            lab = labels[int(cy), int(cx)] if inside else 0
+            lab = regions.label_at(cx, cy) if inside else 0
             jump = np.hypot(cx - tr.rects[-1][0], cy - tr.rects[-1][1]) if tr.rects else 0.0
             if (mass < self.s.min_area_px or mass < self.s.lost_fraction * ref or lab == 0
                     or jump > self.s.max_jump_px):
@@ -97,7 +116,7 @@ class PatchTracker:
             x, y, ww, wh = (int(v) for v in stats[lab, :4])
             rect, window = cv2.CamShift(bp, (x, y, ww, wh), TERM)
             (cx, cy), (rw, rh), ang = rect
-            if not (0 <= cx < w and 0 <= cy < h) or labels[int(cy), int(cx)] != lab:
+            if not (0 <= cx < w and 0 <= cy < h) or regions.label_at(cx, cy) != lab:
                 cx, cy = x + ww / 2, y + wh / 2
             tr = Tracklet(len(self.tracklets), window)
             tr.frames.append(frame_index)

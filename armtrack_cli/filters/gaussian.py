@@ -6,7 +6,8 @@ Functions f, h take time-first arrays (..., n) so the UKF pushes all sigma point
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -17,10 +18,11 @@ class Gaussian:
     P: np.ndarray  # (n, n)
 
 
-def _joseph(P, K, H, R):
-    """Joseph form (I − KH) P (I − KH)ᵀ + K R Kᵀ: symmetric and positive whatever K is."""
-    I_KH = np.eye(P.shape[0]) - K @ H
-    return I_KH @ P @ I_KH.T + K @ R @ K.T
+def _joseph(P, gain, H, R):
+    """Joseph form (I − gain H) P (I − gain H)ᵀ + gain R gainᵀ: symmetric and positive
+    whatever the gain is."""
+    I_KH = np.eye(P.shape[0]) - gain @ H
+    return I_KH @ P @ I_KH.T + gain @ R @ gain.T
 
 
 def kf_predict(s: Gaussian, F: np.ndarray, Q: np.ndarray, b: np.ndarray | None = None) -> Gaussian:
@@ -30,12 +32,12 @@ def kf_predict(s: Gaussian, F: np.ndarray, Q: np.ndarray, b: np.ndarray | None =
 
 
 def kf_update(s: Gaussian, z: np.ndarray | None, H: np.ndarray, R: np.ndarray) -> Gaussian:
-    """K = P Hᵀ (H P Hᵀ + R)⁻¹; x = x + K (z − H x)."""
+    """gain = P Hᵀ (H P Hᵀ + R)⁻¹; x = x + gain (z − H x)."""
     if z is None:
         return s
     S = H @ s.P @ H.T + R
-    K = np.linalg.solve(S.T, (s.P @ H.T).T).T
-    return Gaussian(s.x + K @ (z - H @ s.x), _joseph(s.P, K, H, R))
+    gain = np.linalg.solve(S.T, (s.P @ H.T).T).T
+    return Gaussian(s.x + gain @ (z - H @ s.x), _joseph(s.P, gain, H, R))
 
 
 def ekf_update(s: Gaussian, z: np.ndarray | None, h, H_jac, R: np.ndarray) -> Gaussian:
@@ -44,30 +46,46 @@ def ekf_update(s: Gaussian, z: np.ndarray | None, h, H_jac, R: np.ndarray) -> Ga
         return s
     H = H_jac(s.x)
     S = H @ s.P @ H.T + R
-    K = np.linalg.solve(S.T, (s.P @ H.T).T).T
-    return Gaussian(s.x + K @ (z - h(s.x)), _joseph(s.P, K, H, R))
+    gain = np.linalg.solve(S.T, (s.P @ H.T).T).T
+    return Gaussian(s.x + gain @ (z - h(s.x)), _joseph(s.P, gain, H, R))
 
 
 @dataclass(frozen=True)
 class SigmaPoints:
-    """Van der Merwe's scaled sigma points (Wan & van der Merwe 2000)."""
+    """Van der Merwe's scaled sigma points (Wan & van der Merwe 2000); the weights Wm, Wc are
+    computed once, when the set is made."""
 
     n: int
+    _: KW_ONLY
     alpha: float = 0.5
     beta: float = 2.0
     kappa: float = 0.0
 
     @property
     def lam(self) -> float:
+        """λ = α² (n + κ) − n."""
         return self.alpha**2 * (self.n + self.kappa) - self.n
 
-    def weights(self) -> tuple[np.ndarray, np.ndarray]:
+    @cached_property
+    def _weights(self) -> tuple[np.ndarray, np.ndarray]:
         c = 0.5 / (self.n + self.lam)
-        Wm = np.full(2 * self.n + 1, c)
+        Wm = np.full(2 * self.n + 1, c)  # Wm_i = Wc_i = 1 / 2(n + λ), i ≥ 1
         Wc = Wm.copy()
-        Wm[0] = self.lam / (self.n + self.lam)
-        Wc[0] = Wm[0] + 1 - self.alpha**2 + self.beta
+        Wm[0] = self.lam / (self.n + self.lam)  # Wm_0 = λ / (n + λ)
+        Wc[0] = Wm[0] + 1 - self.alpha**2 + self.beta  # Wc_0 = Wm_0 + 1 − α² + β
+        Wm.flags.writeable = Wc.flags.writeable = False
         return Wm, Wc
+
+    @property
+    def Wm(self) -> np.ndarray:
+        return self._weights[0]
+
+    @property
+    def Wc(self) -> np.ndarray:
+        return self._weights[1]
+
+    def weights(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._weights
 
     def points(self, x: np.ndarray, P: np.ndarray) -> np.ndarray:
         """(2n+1, n): x, x ± columns of √((n+λ) P)."""
@@ -85,7 +103,7 @@ def ukf_predict(s: Gaussian, f, Q: np.ndarray, sp: SigmaPoints) -> Gaussian:
 
 
 def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoints) -> Gaussian:
-    """Measurement sigma points Z = h(X); K = P_xz P_zz⁻¹."""
+    """Measurement sigma points Z = h(X); gain = P_xz P_zz⁻¹."""
     if z is None:
         return s
     Wm, Wc = sp.weights()
@@ -95,27 +113,36 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
     dz, dx = Z - zm, X - s.x
     Pzz = (Wc[:, None] * dz).T @ dz + R
     Pxz = (Wc[:, None] * dx).T @ dz
-    K = np.linalg.solve(Pzz.T, Pxz.T).T
-    P = s.P - K @ Pzz @ K.T
-    return Gaussian(s.x + K @ (z - zm), 0.5 * (P + P.T))
+    gain = np.linalg.solve(Pzz.T, Pxz.T).T
+    P = s.P - gain @ Pzz @ gain.T
+    return Gaussian(s.x + gain @ (z - zm), 0.5 * (P + P.T))
 
 
 def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray, b: np.ndarray,
-               Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+               Q: np.ndarray, *, block: int = 4096) -> tuple[np.ndarray, np.ndarray]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
-    x (K, n), P (K, n, n): filtered means and covariances; F (K, n, n), b (K, n), Q (K, n, n):
-    the step into k (x_k = F_k x_{k-1} + b_k + w, w ~ N(0, Q_k); index 0 unused).
-    C_k = P_k F_{k+1}ᵀ P⁻_{k+1}⁻¹, x^s_k = x_k + C_k (x^s_{k+1} − x⁻_{k+1}),
-    P^s_k = P_k + C_k (P^s_{k+1} − P⁻_{k+1}) C_kᵀ (Rauch, Tung & Striebel 1965).
+    x (n_steps, n), P (n_steps, n, n): filtered means and covariances; F (n_steps, n, n),
+    b (n_steps, n), Q (n_steps, n, n): the step into k (x_k = F_k x_{k-1} + b_k + w,
+    w ~ N(0, Q_k); index 0 unused). The predictions and gains depend only on filtered values,
+    so they are computed for ``block`` steps at once (memory stays flat with the length):
+    x⁻_{k+1} = F_{k+1} x_k + b_{k+1}, P⁻_{k+1} = F_{k+1} P_k F_{k+1}ᵀ + Q_{k+1},
+    gain_k = P_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹; then backwards
+    x^s_k = x_k + gain_k (x^s_{k+1} − x⁻_{k+1}),
+    P^s_k = P_k + gain_k (P^s_{k+1} − P⁻_{k+1}) gain_kᵀ (Rauch, Tung & Striebel 1965).
     """
     xs, Ps = x.copy(), P.copy()
-    for k in range(x.shape[0] - 2, -1, -1):
-        Fk = F[k + 1]
-        xp = Fk @ x[k] + b[k + 1]
-        Pp = Fk @ P[k] @ Fk.T + Q[k + 1]
-        C = np.linalg.solve(Pp.T, (P[k] @ Fk.T).T).T
-        xs[k] = x[k] + C @ (xs[k + 1] - xp)
-        Pk = P[k] + C @ (Ps[k + 1] - Pp) @ C.T
-        Ps[k] = 0.5 * (Pk + Pk.T)
+    for stop in range(x.shape[0] - 1, 0, -block):  # steps k in [start, stop), backwards
+        start = max(0, stop - block)
+        Fn = F[start + 1:stop + 1]
+        FnT = np.swapaxes(Fn, 1, 2)
+        xp = np.einsum("kij,kj->ki", Fn, x[start:stop]) + b[start + 1:stop + 1]
+        Pp = Fn @ P[start:stop] @ FnT + Q[start + 1:stop + 1]
+        gain = np.swapaxes(np.linalg.solve(np.swapaxes(Pp, 1, 2),
+                                           np.swapaxes(P[start:stop] @ FnT, 1, 2)), 1, 2)
+        for j in range(stop - start - 1, -1, -1):
+            k = start + j
+            xs[k] = x[k] + gain[j] @ (xs[k + 1] - xp[j])
+            Pk = P[k] + gain[j] @ (Ps[k + 1] - Pp[j]) @ gain[j].T
+            Ps[k] = 0.5 * (Pk + Pk.T)
     return xs, Ps

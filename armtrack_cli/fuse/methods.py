@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armtrack_cli.filters import gaussian as G
+from armtrack_cli.filters import gaussian
 from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
 from armtrack_cli.fuse.models import Arm, Projection, Steps
@@ -21,15 +21,15 @@ class Inputs:
     orientation at the frame time."""
 
     steps: Steps
-    z: np.ndarray  # (K, 2) px, NaN where the patch was not detected
-    q_WB: np.ndarray  # (K, 4)
+    z: np.ndarray  # (n_frames, 2) px, NaN where the patch was not detected
+    q_WB: np.ndarray  # (n_frames, 4)
 
 
 @dataclass(frozen=True)
 class Estimates:
-    mean: np.ndarray  # (K, 6) wrist position and velocity
-    cov: np.ndarray  # (K, 6, 6)
-    ess: np.ndarray | None  # (K,) particle filters only
+    mean: np.ndarray  # (n_frames, 6) wrist position and velocity
+    cov: np.ndarray  # (n_frames, 6, 6)
+    ess: np.ndarray | None  # (n_frames,) particle filters only
 
     @property
     def sd(self) -> np.ndarray:
@@ -41,26 +41,55 @@ def _z(inp: Inputs, k: int) -> np.ndarray | None:
 
 
 def run_gaussian(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection, s: FuseSettings,
-                 method: str) -> Estimates:
-    """inertial (prediction only), EKF or UKF, started at frame 0 with (x0, P0)."""
-    K = inp.z.shape[0]
+                 method: str, *, compiled: bool = True) -> Estimates:
+    """inertial (prediction only), EKF or UKF, started at frame 0 with (x0, P0). ``compiled``:
+    the numba loop (fuse/gaussian_kernel.py); this numpy loop over the pure steps of
+    filters/gaussian.py is the reference it is tested against."""
+    n_frames = inp.z.shape[0]
+    sp = gaussian.SigmaPoints(6, alpha=s.ukf_alpha, beta=s.ukf_beta, kappa=s.ukf_kappa)
+    if compiled:
+        return _run_gaussian_compiled(inp, x0, P0, proj, s, method, sp)
     R = s.pixel_sigma**2 * np.eye(2)
-    sp = G.SigmaPoints(6, s.ukf_alpha, s.ukf_beta, s.ukf_kappa)
-    st = G.Gaussian(x0, P0)
-    mean, cov = np.empty((K, 6)), np.empty((K, 6, 6))
-    for k in range(K):
+    st = gaussian.Gaussian(x0, P0)
+    mean, cov = np.empty((n_frames, 6)), np.empty((n_frames, 6, 6))
+    for k in range(n_frames):
         if k > 0:
             if method == "ukf":
-                st = G.ukf_predict(st, lambda X, k=k: inp.steps.apply(k, X), inp.steps.Q(k), sp)
+                st = gaussian.ukf_predict(st, lambda X, k=k: inp.steps.apply(k, X),
+                                          inp.steps.Q(k), sp)
             else:  # linear process: the KF prediction is the EKF's (eq. 6)
-                st = G.kf_predict(st, inp.steps.F(k), inp.steps.Q(k), inp.steps.b(k))
+                st = gaussian.kf_predict(st, inp.steps.F(k), inp.steps.Q(k), inp.steps.b(k))
         z = _z(inp, k)
         if method == "ekf":
-            st = G.ekf_update(st, z, lambda x: proj(x[:3]),
-                              lambda x: np.hstack([proj.jacobian(x[:3]), np.zeros((2, 3))]), R)
+            st = gaussian.ekf_update(st, z, lambda x: proj(x[:3]), lambda x: np.hstack(
+                [proj.jacobian(x[:3]), np.zeros((2, 3))]), R)
         elif method == "ukf":
-            st = G.ukf_update(st, z, lambda X: proj(X[:, :3]), R, sp)
+            st = gaussian.ukf_update(st, z, lambda X: proj(X[:, :3]), R, sp)
         mean[k], cov[k] = st.x, st.P
+    return Estimates(mean, cov, None)
+
+
+def _camera_arrays(proj: Projection) -> tuple[np.ndarray, np.ndarray]:
+    """The projection as the kernels take it: (R row-major, T, fx, fy, cx, cy) and the
+    distortion (k1, k2, p1, p2, k3)."""
+    cam = np.r_[proj.R.ravel(), np.ravel(proj.T), proj._f, proj._c].astype(float)
+    return cam, np.array([proj.k1, proj.k2, proj.p1, proj.p2, proj.k3], float)
+
+
+def _f64(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=float)
+
+
+def _run_gaussian_compiled(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+                           s: FuseSettings, method: str, sp: gaussian.SigmaPoints) -> Estimates:
+    from armtrack_cli.fuse import gaussian_kernel
+
+    st = inp.steps
+    cam, dist = _camera_arrays(proj)
+    mean, cov = gaussian_kernel.run(
+        _f64(x0), _f64(P0), _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), float(st.q),
+        cam, dist, float(s.pixel_sigma**2), gaussian_kernel.METHODS[method], sp.Wm, sp.Wc,
+        float(sp.n + sp.lam))
     return Estimates(mean, cov, None)
 
 
@@ -75,24 +104,30 @@ def _predict_particles(x: np.ndarray, st: Steps, k: int, ace: np.ndarray,
 
 
 def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
-                  s: FuseSettings, arm: Arm | None, constrained: bool) -> Estimates:
+                  s: FuseSettings, arm: Arm | None, *, constrained: bool,
+                  compiled: bool = True) -> Estimates:
     """Bootstrap PF (eqs. 12-14), or the layered-sampling PF of section III-E, steps 1-7.
 
     Particles are an (N, 6) array. After every resampling the weights are equal, so each
-    layer's weights are just its normalised likelihood."""
+    layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
+    (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
+    reference, to round-off (tests/test_pf_kernel.py)."""
     rng = np.random.default_rng(s.seed)
-    K, N = inp.z.shape[0], s.particles
-    resample = scheme(s.resampling)
+    N = s.particles
     x = rng.multivariate_normal(x0, P0, size=N)
+    if compiled:
+        return _run_particles_compiled(inp, x, rng, proj, s, arm, constrained)
+    n_frames = inp.z.shape[0]
+    resample = scheme(s.resampling)
     w = np.full(N, 1.0 / N)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else None
-    mean, cov, n_eff = np.empty((K, 6)), np.empty((K, 6, 6)), np.empty(K)
+    mean, cov, n_eff = np.empty((n_frames, 6)), np.empty((n_frames, 6, 6)), np.empty(n_frames)
     inv2s2 = 0.5 / s.pixel_sigma**2
     inv2c2 = 0.5 / s.constraint_sigma_m**2
     ace = inp.steps.noise_factors()
     seen = np.isfinite(inp.z).all(axis=1)
-    for k in range(K):
+    for k in range(n_frames):
         eps = rng.standard_normal((N, 12))
         if k > 0:  # step 1: particle prediction from p¹ (eq. 10)
             x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
@@ -123,6 +158,44 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     return Estimates(mean, cov, n_eff)
 
 
+def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator,
+                            proj: Projection, s: FuseSettings, arm: Arm | None,
+                            constrained: bool) -> Estimates:
+    from armtrack_cli.fuse import pf_kernel
+
+    scheme(s.resampling)  # an unknown name is the same error as in the reference
+    st = inp.steps
+    cam, dist = _camera_arrays(proj)
+    walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
+    centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
+    mean, cov, n_eff = pf_kernel.run(
+        _f64(x), rng, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
+        _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
+        float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
+        float(s.pf_resample_ess))
+    return Estimates(mean, cov, n_eff)
+
+
+def load_kernels(method: str) -> None:
+    """Load ``method``'s compiled kernel (numba's set-up and its cache, about half a second
+    once per process; a compile, once per install) by running it on a two-frame problem, so
+    that a caller timing ``run`` times the filter only."""
+    if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint"):
+        return
+    from armtrack_cli.fuse import gaussian_kernel, pf_kernel
+
+    z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
+    cam = np.r_[np.eye(3).ravel(), 0.0, 0.0, 10.0, 1.0, 1.0, 0.0, 0.0]  # 10 m in front
+    dist, x0 = np.zeros(5), np.zeros(6)
+    if method in ("ekf", "ukf", "inertial"):
+        sp = gaussian.SigmaPoints(6)
+        gaussian_kernel.run(x0, 1e-4 * np.eye(6), z, q, d3, d3, 0.0, cam, dist, 1.0,
+                            gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0)
+    else:
+        pf_kernel.run(np.zeros((10, 6)), np.random.default_rng(0), z, q, d3, d3, d3, d3, cam,
+                      dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0, 1.0)
+
+
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
         s: FuseSettings, arm: Arm | None) -> Estimates:
     if method in ("inertial", "ekf", "ukf"):
@@ -145,12 +218,9 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimat
     (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
     through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
     to the process noise of each step."""
-    K = est.mean.shape[0]
-    F = np.stack([inp.steps.F(k) for k in range(K)])
-    b = np.stack([inp.steps.b(k) for k in range(K)])
-    Q = np.stack([inp.steps.Q(k) for k in range(K)])
+    F, b, Q = inp.steps.stacked()
     if method == "pf-constraint":
         Q = Q + np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2)
     Q += 1e-12 * np.eye(6)
-    x, P = G.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), F, b, Q)
+    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), F, b, Q)
     return Estimates(x, P, est.ess)

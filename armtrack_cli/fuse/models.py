@@ -31,9 +31,9 @@ class Steps:
     Folding every IMU sample between two frames into one step is exact for this linear model.
     """
 
-    dt: np.ndarray  # (K,) Δ, s (dt[0] = 0)
-    dp: np.ndarray  # (K, 3) m
-    dv: np.ndarray  # (K, 3) m/s
+    dt: np.ndarray  # (n_frames,) Δ, s (dt[0] = 0)
+    dp: np.ndarray  # (n_frames, 3) m
+    dv: np.ndarray  # (n_frames, 3) m/s
     q: float  # acceleration noise density, m²/s³
 
     def F(self, k: int) -> np.ndarray:
@@ -49,8 +49,27 @@ class Steps:
         blk = self.q * np.array([[d**3 / 3, d**2 / 2], [d**2 / 2, d]])
         return np.kron(blk, np.eye(3))
 
+    def stacked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """F (n_frames, 6, 6), b (n_frames, 6), Q (n_frames, 6, 6): F(k), b(k), Q(k) for every
+        frame at once (the same arithmetic, so the same numbers)."""
+        d = self.dt
+        n_frames = d.size
+        F = np.tile(np.eye(6), (n_frames, 1, 1))
+        idx = np.arange(3)
+        F[:, idx, 3 + idx] = d[:, None]
+        b = np.hstack([self.dp, self.dv])
+        # Δ³ and Δ² by C's pow per element, as the scalar Δ**3 of Q(k) (numpy's array power
+        # rounds differently)
+        d3 = np.fromiter((v**3 for v in d.tolist()), float, n_frames)
+        d2 = np.fromiter((v**2 for v in d.tolist()), float, n_frames)
+        Q = np.zeros((n_frames, 6, 6))
+        for (r, c), v in (((0, 0), self.q * (d3 / 3)), ((0, 3), self.q * (d2 / 2)),
+                          ((3, 0), self.q * (d2 / 2)), ((3, 3), self.q * d)):
+            Q[:, r + idx, c + idx] = v[:, None]
+        return F, b, Q
+
     def noise_factors(self) -> np.ndarray:
-        """(K, 3) rows (a, c, e) with Q = L Lᵀ ⊗ I₃, L = [[a, 0], [c, e]]: the closed-form
+        """(n_frames, 3) rows (a, c, e) with Q = L Lᵀ ⊗ I₃, L = [[a, 0], [c, e]]: the closed-form
         Cholesky factor of q [[Δ³/3, Δ²/2], [Δ²/2, Δ]], so position noise is a·ε₁ and velocity
         noise c·ε₁ + e·ε₂ (ε independent standard normals). For all frames at once."""
         d = self.dt
@@ -67,7 +86,7 @@ class Steps:
         return out
 
 
-def composite_steps(t_imu: np.ndarray, a_W: np.ndarray, t_frames: np.ndarray,
+def composite_steps(t_imu: np.ndarray, a_W: np.ndarray, t_frames: np.ndarray, *,
                     accel_noise: float, imu_period: float) -> Steps:
     """Integrate the held accelerations a_W (M, 3) at t_imu over each frame interval.
 
@@ -81,9 +100,9 @@ def composite_steps(t_imu: np.ndarray, a_W: np.ndarray, t_frames: np.ndarray,
     k = np.searchsorted(t_frames, s0, side="right")  # the frame interval ending at t_frames[k]
     T1 = t_frames[k]
     tau = s1 - s0
-    K = t_frames.size
-    dv = np.zeros((K, 3))
-    dp = np.zeros((K, 3))
+    n_frames = t_frames.size
+    dv = np.zeros((n_frames, 3))
+    dp = np.zeros((n_frames, 3))
     np.add.at(dv, k, a * tau[:, None])
     np.add.at(dp, k, a * (((T1 - s0) ** 2 - (T1 - s1) ** 2) / 2)[:, None])
     dt = np.r_[0.0, np.diff(t_frames)]
@@ -104,9 +123,9 @@ class Projection:
         self._f = np.array([cam.K[0, 0], cam.K[1, 1]])
         self._c = np.array([cam.K[0, 2], cam.K[1, 2]])
 
-    def __call__(self, P: np.ndarray) -> np.ndarray:
-        """Pixels (..., 2) of points P (..., 3) in W (OpenCV's model, on stacked (x, y))."""
-        X = P @ self.R.T + self.T
+    def __call__(self, points: np.ndarray) -> np.ndarray:
+        """Pixels (..., 2) of points (..., 3) in W (OpenCV's model, on stacked (x, y))."""
+        X = points @ self.R.T + self.T
         n = X[..., :2] / X[..., 2:]  # normalised (x, y)
         sq = n * n
         r2 = sq[..., 0] + sq[..., 1]
@@ -141,7 +160,7 @@ class Projection:
         return d / np.linalg.norm(d)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Arm:
     """Tao & Hu's arm: fixed shoulder S, upper arm L1, forearm L2 along the IMU's forearm axis."""
 
@@ -155,7 +174,7 @@ class Arm:
         return p - self.L2 * quat.rotate(q_WB, self.forearm_B)
 
     def sphere_centres(self, q_WB: np.ndarray) -> np.ndarray:
-        """(K, 3) S + L2 R_WB u per frame: |p − centre| = |E − S|, so the residual of eq. 15 is
+        """(n_frames, 3) S + L2 R_WB u per frame: |p − centre| = |E − S|, so the residual of eq. 15 is
         |p − centre| − L1 (computed once for all frames)."""
         return self.shoulder + self.L2 * quat.rotate(q_WB, self.forearm_B)
 

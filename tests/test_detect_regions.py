@@ -1,0 +1,64 @@
+"""The fast paths of detection against their references: regions labelled on the box around
+the mask's pixels = connectedComponentsWithStats on the whole mask (labels, order, stats); the
+one-pass patch mask = hue back-projection masked by S and V."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from armtrack_cli.detect.colour import hue_histogram
+from armtrack_cli.detect.patch_tracker import back_projection, patch_mask
+from armtrack_cli.detect.regions import Regions
+
+
+def _blobs(seed: int, shape=(97, 131)) -> np.ndarray:
+    """Random blobs and speckle, some touching the borders, at odd and even offsets."""
+    rng = np.random.default_rng(seed)
+    m = np.zeros(shape, np.uint8)
+    for _ in range(rng.integers(0, 12)):
+        c = (int(rng.integers(-5, shape[1] + 5)), int(rng.integers(-5, shape[0] + 5)))
+        axes = (int(rng.integers(1, 15)), int(rng.integers(1, 15)))
+        cv2.ellipse(m, c, axes, float(rng.uniform(0, 180)), 0, 360, 255, -1)
+    m[rng.random(shape) < 0.01] = 255
+    m[rng.integers(0, shape[0]), :3] = 255  # something on the edges
+    m[-2:, rng.integers(0, shape[1])] = 255
+    return m
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_regions_are_the_whole_mask_components(seed):
+    m = _blobs(seed)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(m, 8)
+    r = Regions(m)
+    assert r.n == n
+    np.testing.assert_array_equal(r.stats[1:], stats[1:])
+    rows, cols = np.nonzero(m)
+    assert [r.label_at(c + 0.5, v + 0.5) for v, c in zip(rows, cols)] == labels[rows, cols].tolist()
+    for k in range(1, n):
+        x, y, w, h = stats[k, :4]
+        np.testing.assert_array_equal(r.mask_of(k), labels[y:y + h, x:x + w] == k)
+    assert r.label_at(-1, -1) == 0 and r.label_at(m.shape[1] + 3, 0) == 0
+
+
+@pytest.mark.parametrize("low,high", [((0, 140, 90), (12, 255, 255)),
+                                      ((170, 140, 90), (10, 255, 255)),
+                                      ((100, 60, 40), (130, 200, 255))])
+@pytest.mark.parametrize("seed", range(12))
+def test_patch_mask_is_the_masked_back_projection(low, high, seed):
+    """Noise everywhere (seed 0), or a few patches and speckle on a plain background, some at
+    the image's edges (the opening is done on their box only)."""
+    rng = np.random.default_rng(seed)
+    hsv = np.dstack([rng.integers(0, 180, (120, 160)), rng.integers(0, 256, (120, 160)),
+                     rng.integers(0, 256, (120, 160))]).astype(np.uint8)
+    if seed:
+        plain = np.zeros_like(hsv)
+        plain[...] = (90, 30, 30)
+        keep = _blobs(seed, (120, 160)) > 0
+        plain[keep] = hsv[keep]
+        hsv = plain
+    hsv[40:70, 50:90] = (low[0], 200, 200)  # a patch
+    hist = hue_histogram(low[0], high[0])
+    np.testing.assert_array_equal(patch_mask(hsv, low, high),
+                                  back_projection(hsv, hist, low, high))
