@@ -92,7 +92,7 @@ def versus_filterpy(video, blobs, rig, palm) -> tuple[float, float, float]:
         zs[k] = blobs[k][np.argmin(d, axis=1), :2].ravel()
     t = video.t
     R_meas = np.eye(12) * s.pixel_sigma**2
-    sp = SigmaPoints(18, s.alpha, s.beta, s.kappa)
+    sp = SigmaPoints(18, alpha=s.alpha, beta=s.beta, kappa=s.kappa)
 
     def ours():
         st, out = initial_state(s), []

@@ -28,10 +28,16 @@ def _predict(x, P, dt, dp, dv, q, xo, Po):
     for a in range(6):
         for b in range(6):
             FP[a, b] = P[a, b] + dt * P[a + 3, b] if a < 3 else P[a, b]
-    qpp, qpv, qvv = q * dt**3 / 3, q * dt**2 / 2, q * dt
     for a in range(6):
         for b in range(6):
             Po[a, b] = FP[a, b] + dt * FP[a, b + 3] if b < 3 else FP[a, b]
+    _add_white_acceleration(Po, q, dt)
+
+
+@njit(cache=True)
+def _add_white_acceleration(Po, q, dt):
+    """Po += Q of a white-acceleration density q over dt: [[dt³/3, dt²/2], [dt²/2, dt]] q."""
+    qpp, qpv, qvv = q * dt**3 / 3, q * dt**2 / 2, q * dt
     for j in range(3):
         Po[j, j] += qpp
         Po[j, 3 + j] += qpv
@@ -132,12 +138,7 @@ def _ukf_predict(x, P, dt, dp, dv, q, Wm, Wc, scale, X, xo, Po):
             X[i, j] += X[i, 3 + j] * dt + dp[j]
             X[i, 3 + j] += dv[j]
     _weighted_moments(X, Wm, Wc, xo, Po)
-    qpp, qpv, qvv = q * dt**3 / 3, q * dt**2 / 2, q * dt
-    for j in range(3):
-        Po[j, j] += qpp
-        Po[j, 3 + j] += qpv
-        Po[3 + j, j] += qpv
-        Po[3 + j, 3 + j] += qvv
+    _add_white_acceleration(Po, q, dt)
 
 
 @njit(cache=True)

@@ -70,7 +70,7 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
     without a reading). Blobs larger than s.merged_area × area_px (one marker's area) are
     merged markers, never used."""
     K, M = t.size, rig.markers_H.shape[0]
-    sp = SigmaPoints(STATE_DIM + NOISE_DIM, s.alpha, s.beta, s.kappa)
+    sp = SigmaPoints(STATE_DIM + NOISE_DIM, alpha=s.alpha, beta=s.beta, kappa=s.kappa)
     R_meas = np.diag([s.pixel_sigma**2] * 2 * M + [s.depth_sigma_m**2] * M)
     out_R, out_x = np.full((K, 3, 3), np.nan), np.full((K, 9), np.nan)
     out_P = np.full((K, STATE_DIM, STATE_DIM), np.nan)

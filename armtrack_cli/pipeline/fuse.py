@@ -16,7 +16,7 @@ from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
 from armtrack_cli.core.methods import DEFAULT_FOR_KIND, PALM_METHODS
 from armtrack_cli.fuse import models
-from armtrack_cli.fuse.methods import Inputs, run
+from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
@@ -115,6 +115,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     x0[:3], how = models.initial_wrist(p.projection, inp.z[0], arm=p.arm, q_WB=inp.q_WB[0],
                                        plane_height_m=s.init_plane_m)
     P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
+    load_kernels(s.method)  # numba's one-time set-up: frames_per_s is the filter's own
     start = time.perf_counter()
     est = run(s.method, inp, x0, P0, p.projection, s, p.arm)
     elapsed = time.perf_counter() - start
