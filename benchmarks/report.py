@@ -79,21 +79,26 @@ def write_report(res: dict, path: Path) -> str:
     L += ["", "Growth with session length: "
           + _linear([sec / n for _, n, sec in res["scaling"]]) + "."]
     for minutes, rows in res["e2e"].items():
-        ref = rows[0][1]
-        total = sum(sec for _, sec, _, _ in rows[1:])
-        peak = max(mb for _, _, mb, _ in rows[1:])
-        L += ["", f"## A {minutes:g}-minute session end to end ({int(minutes * 1800)} frames, "
-              f"{int(minutes * 6000)} IMU samples), default method", "",
-              "| stage | seconds | share | peak memory (MB) |", "|---|---|---|---|"]
-        for name, sec, mb, err in rows:
-            share = "—" if name.startswith("decode") else f"{100 * sec / total:.0f} %"
-            L.append(f"| {name} | {sec:.1f} | {share} | {mb:.0f} |" if not err else
-                     f"| {name} | failed: {err} | | |")
-        L.append(f"| calibrate → compare | {total:.1f} | 100 % | {peak:.0f} |")
-        L += ["", f"calibrate → compare: {total:.1f} s, {total / ref:.2f}× decoding the video "
-              f"once (goal ≤ 15 s for 10 minutes and ≤ 1.5×: "
-              f"{_met(total / ref <= 1.5 and (minutes != 10 or total <= 15))}); peak memory "
-              f"{peak:.0f} MB (goal ≤ 300 MB: {_met(peak <= 300)})."]
+        L += _end_to_end(minutes, rows)
     text = "\n".join(L) + "\n"
     path.write_text(text)
     return text
+
+
+def _end_to_end(minutes: float, rows) -> list[str]:
+    """The table of one end-to-end run: each stage's time, share and peak memory."""
+    ref = rows[0][1]
+    total = sum(sec for _, sec, _, _ in rows[1:])
+    peak = max(mb for _, _, mb, _ in rows[1:])
+    L = ["", f"## A {minutes:g}-minute session end to end ({int(minutes * 1800)} frames, "
+         f"{int(minutes * 6000)} IMU samples), default method", "",
+         "| stage | seconds | share | peak memory (MB) |", "|---|---|---|---|"]
+    for name, sec, mb, err in rows:
+        share = "—" if name.startswith("decode") else f"{100 * sec / total:.0f} %"
+        L.append(f"| {name} | {sec:.1f} | {share} | {mb:.0f} |" if not err else
+                 f"| {name} | failed: {err} | | |")
+    L.append(f"| calibrate → compare | {total:.1f} | 100 % | {peak:.0f} |")
+    return L + ["", f"calibrate → compare: {total:.1f} s, {total / ref:.2f}× decoding the video "
+                f"once (goal ≤ 15 s for 10 minutes and ≤ 1.5×: "
+                f"{_met(total / ref <= 1.5 and (minutes != 10 or total <= 15))}); peak memory "
+                f"{peak:.0f} MB (goal ≤ 300 MB: {_met(peak <= 300)})."]

@@ -15,6 +15,7 @@ import click
 from armtrack_cli import __version__
 from armtrack_cli.cli import text
 from armtrack_cli.cli.batch import cohort_run, each, emit, expand, out_for, progress
+from armtrack_cli.cli.params import Finite, parse_hide, parse_pixels
 from armtrack_cli.core.errors import ArmtrackError
 from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
@@ -45,18 +46,6 @@ class _Group(click.Group):
             ctx.exit(1)
 
 
-class Finite(click.FloatRange):
-    """A float in a range, with NaN and infinities refused (click's FloatRange lets NaN by)."""
-
-    def convert(self, value, param, ctx):
-        import math
-
-        v = super().convert(value, param, ctx)
-        if not math.isfinite(v):
-            self.fail(f"{value!r} is not a finite number", param, ctx)
-        return v
-
-
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 out_option = click.option("--out", "out_dir", type=click.Path(file_okay=False),
                           help="Work folder: read earlier stages' outputs from it and write this "
@@ -68,21 +57,6 @@ set_option = click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
                           help="Override one recipe setting, e.g. detect.patch.move_px=15 "
                           "(repeatable).")
 json_option = click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
-
-
-def _parse_pixels(spec: str):
-    """'u1,v1;u2,v2;…' -> (k, 2) array."""
-    import numpy as np
-
-    try:
-        pts = [tuple(float(x) for x in p.split(",")) for p in spec.replace(" ", "").split(";") if p]
-        arr = np.array(pts, float)
-        if arr.ndim != 2 or arr.shape[1] != 2 or not np.isfinite(arr).all():
-            raise ValueError
-        return arr
-    except ValueError:
-        raise click.BadParameter(f"{spec!r} is not 'u,v;u,v;…' in the [palm] markers order",
-                                 param_hint="--markers") from None
 
 
 @click.group(cls=_Group, context_settings=CONTEXT)
@@ -131,7 +105,7 @@ def calibrate(sessions, frame, markers, recipe, sets, as_json, out_dir) -> None:
     """The camera's pose in W from the ChArUco board in frame N (intrinsics from
     intrinsics.yaml or from board images in calib/), written to camera.yaml; for palm sessions
     also the palm model (palm.toml)."""
-    px = _parse_pixels(markers) if markers else None
+    px = parse_pixels(markers) if markers else None
 
     from armtrack_cli import pipeline
 
@@ -369,7 +343,7 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
         settings = pipeline.PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
                                    qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
                                    distortion=not no_distortion, calib_images=calib_images,
-                                   hide=tuple(_parse_hide(h) for h in hides), clutter2_s=clutter2)
+                                   hide=tuple(parse_hide(h) for h in hides), clutter2_s=clutter2)
     else:
         settings = pipeline.ArmSimSettings(
             task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
@@ -384,17 +358,6 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
         result = pipeline.simulate(target, settings, imu_format=imu_format, force=force,
                                    on_frame=bar)
     emit(result, as_json, text.simulate_lines(result))
-
-
-def _parse_hide(spec: str) -> tuple[int, float, float]:
-    try:
-        k, a, d = spec.split(":")
-        if not (0 <= int(k) <= 5 and 0 <= float(a) <= 3600 and 0 < float(d) <= 3600):
-            raise ValueError
-        return int(k), float(a), float(d)
-    except ValueError:
-        raise click.BadParameter(f"{spec!r} is not MARKER:START:DURATION (MARKER 0-5)",
-                                 param_hint="--hide") from None
 
 
 def render_reference() -> str:

@@ -95,12 +95,24 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     xyz = coords.reshape(-1, m, 3) * MM
     xyz[np.all(xyz == 0.0, axis=2)] = np.nan  # QTM writes gaps as zeros in some versions
     xyz[np.any(np.isnan(xyz), axis=2)] = np.nan
+    t = _times(path, tab, time_col, frame_col, freq, xyz.shape[0])
+    notes = list(tab.notes)
+    n_frames = keys.get("NO_OF_FRAMES", [None])[0]
+    if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
+        notes.append(f"NO_OF_FRAMES says {n_frames}, the table has {xyz.shape[0]} rows")
+    return MarkerTrajectories(str(path), t, names, xyz, freq, tuple(notes))
+
+
+def _times(path: Path, tab, time_col: int | None, frame_col: int | None, freq: float,
+           n: int) -> np.ndarray:
+    """Frame times (s from the first frame): the Time column, else Frame / FREQUENCY, else
+    row / FREQUENCY; checked to be finite, increasing and ticking at FREQUENCY."""
     if time_col is not None:
         t = tab.data[:, time_col]
     elif frame_col is not None:
         t = (tab.data[:, frame_col] - 1) / freq
     else:
-        t = np.arange(xyz.shape[0]) / freq
+        t = np.arange(n) / freq
     if not np.isfinite(t).all():
         r = int(np.flatnonzero(~np.isfinite(t))[0])
         raise GroundTruthError(path, f"line {tab.line_of[r]}: the time/frame cell is empty")
@@ -116,11 +128,7 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
                                "export Time in seconds, as QTM does")
     if t[-1] - t[0] > MAX_SESSION_S:
         raise GroundTruthError(path, f"spans {(t[-1] - t[0]) / 3600:.0f} h: its time is damaged")
-    notes = list(tab.notes)
-    n_frames = keys.get("NO_OF_FRAMES", [None])[0]
-    if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
-        notes.append(f"NO_OF_FRAMES says {n_frames}, the table has {xyz.shape[0]} rows")
-    return MarkerTrajectories(str(path), t, names, xyz, freq, tuple(notes))
+    return t
 
 
 def select_markers(traj: MarkerTrajectories, wanted: dict[str, str], toml: Path) -> dict[str, int]:
