@@ -98,6 +98,6 @@ def test_the_pipeline_map_names_only_what_exists():
     assert len(rows) >= 6, rows
     for func, _, where in rows:
         assert callable(getattr(pipeline, func, None)), f"pipeline.{func} is in the map, not the code"
-        for folder in re.findall(r"(\w+)/", where):
+        for folder in re.findall(r"((?:\w+/)+)", where):
             assert (PKG / folder).is_dir(), f"{folder}/ is in the map, not the package"
     assert set(pipeline.STAGES) - {"report"} <= {f for f, _, _ in rows}

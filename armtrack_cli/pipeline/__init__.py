@@ -12,6 +12,8 @@
                                            one subject: their progress)
     run(SESSION)         (this package)    every stage above, in order, each only when its
                                            inputs are newer than its outputs
+    run_many(FOLDERS)    (this package)    run over many sessions, on Dask when asked -> cohort.csv
+    export(SESSION)      session/export/   trajectories and truth for other tools (TUM, CSV, C3D)
     simulate(OUT)        simulate/         sessions with exact truth, for tests and lab checks
 
 Each stage reads its inputs through ``session`` (the I/O layer), calls pure functions of
@@ -24,7 +26,9 @@ quaternions, errors, the method list).
 
 from armtrack_cli.pipeline.calibrate import calibrate
 from armtrack_cli.pipeline.compare import compare
+from armtrack_cli.pipeline.batch import run_many
 from armtrack_cli.pipeline.detect import detect
+from armtrack_cli.pipeline.export import export
 from armtrack_cli.pipeline.fuse import fuse
 from armtrack_cli.pipeline.info import frame_count, info
 from armtrack_cli.pipeline.report import report
@@ -34,4 +38,5 @@ from armtrack_cli.simulate.arm_session import ArmSimSettings
 from armtrack_cli.simulate.palm_session import PalmSimSettings
 
 __all__ = ["info", "frame_count", "calibrate", "detect", "fuse", "compare", "report", "run",
+           "run_many", "export",
            "STAGES", "simulate", "simulate_command", "ArmSimSettings", "PalmSimSettings"]
