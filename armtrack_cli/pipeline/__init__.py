@@ -24,9 +24,9 @@ compare measures the truth beside them), filters/ (Kalman, unscented, particle),
 quaternions, errors, the method list).
 """
 
+from armtrack_cli.pipeline.batch import run_many
 from armtrack_cli.pipeline.calibrate import calibrate
 from armtrack_cli.pipeline.compare import compare
-from armtrack_cli.pipeline.batch import run_many
 from armtrack_cli.pipeline.detect import detect
 from armtrack_cli.pipeline.export import export
 from armtrack_cli.pipeline.fuse import fuse
