@@ -26,15 +26,18 @@ AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
 CHECK_SEARCH_S = 1.0  # a declared offset is checked within ±1 s of itself
 
 
-def synchronised_truth(session: Session, work: WorkFolder, methods) -> tuple[Truth, dict]:
+SYNC_PREFERENCE = ("pf-constraint", "ukf", "pf", "ekf", "inertial")  # best-tracking first
+
+
+def synchronised_truth(session: Session, trajs: dict) -> tuple[Truth, dict]:
     """The truth on the session clock, and how its offset was set: declared (and checked
     against the data: a disagreement beyond 3 SD is a one-line warning) or "auto" (estimated
-    from the trajectory of the best method present)."""
+    from the trajectory of the best method in ``trajs``, method -> trajectory table)."""
     gt = session.groundtruth
-    declared = gt is not None and session.sync.groundtruth_offset_s != "auto"
+    declared = session.sync.groundtruth_offset_s != "auto"
     raw = read_truth(session, offset_s=0.0)
-    ref = next((m for m in SYNC_PREFERENCE if m in methods), methods[0])
-    traj = read_trajectory(work / f"trajectory-{ref}.csv")
+    ref = next((m for m in SYNC_PREFERENCE if m in trajs), next(iter(trajs)))
+    traj = trajs[ref]
     joint = "wrist" if "wrist" in raw.xyz else next(iter(raw.xyz))
     est = traj[[f"{joint}_x", f"{joint}_y", f"{joint}_z"]].to_numpy() if f"{joint}_x" in traj \
         else None
@@ -60,9 +63,6 @@ def synchronised_truth(session: Session, work: WorkFolder, methods) -> tuple[Tru
     return Truth(raw.t + centre, raw.xyz, raw.rate_hz), info
 
 
-SYNC_PREFERENCE = ("pf-constraint", "ukf", "pf", "ekf", "inertial")
-
-
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
             out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
@@ -73,10 +73,10 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    truth, offset = synchronised_truth(session, work, methods)
+    trajs = {m: read_trajectory(work / f"trajectory-{m}.csv") for m in methods}
+    truth, offset = synchronised_truth(session, trajs)
     rows, mrows, excluded = [], [], {}
-    for m in methods:
-        traj = read_trajectory(work / f"trajectory-{m}.csv")
+    for m, traj in trajs.items():
         t = traj["t"].to_numpy()
         if truth.t[0] > t[-1] or truth.t[-1] < t[0]:
             raise DataError(session.groundtruth.file, f"does not overlap trajectory-{m}.csv in "

@@ -26,10 +26,6 @@ def newest(paths) -> float | None:
     return None if any(t is None for t in times) else max(times, default=0.0)
 
 
-def exists(path: str | Path) -> bool:
-    return Path(path).exists()
-
-
 @dataclass(frozen=True)
 class WorkFolder:
     path: Path
