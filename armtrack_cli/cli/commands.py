@@ -303,6 +303,10 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 @click.option("--gt-gaps", type=click.IntRange(0, 50), default=0, show_default=True,
               help="Gaps of 0.1-0.4 s in the Qualisys wrist marker.")
 @click.option("--distractor", is_flag=True, help="A disc of the patch's hue on the table.")
+@click.option("--moving-distractor", is_flag=True,
+              help="Arm tasks: the other arm, in a sleeve of the patch's hue, crossing over and "
+              "near the patch from 3 s on.")
+@click.option("--clutter", is_flag=True, help="Arm tasks: objects of many colours on the table.")
 @click.option("--occlusion", "occlusions", multiple=True, metavar="START:DURATION",
               help="A card hides the patch from START for DURATION seconds (repeatable).")
 @click.option("--no-distortion", is_flag=True, help="An ideal pinhole lens.")
@@ -321,7 +325,7 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
-             distractor, occlusions, no_distortion, calib_images, recorded, undeclared_imu_offset,
+             distractor, moving_distractor, clutter, occlusions, no_distortion, calib_images, recorded, undeclared_imu_offset,
              hides, clutter2, force, as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
@@ -349,7 +353,8 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
             task=task, seed=seed, duration_s=duration, fps=fps, imu_rate_hz=imu_rate,
             imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
             drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
-            distractor=distractor, occlusions=tuple(occ), distortion=not no_distortion,
+            distractor=distractor, moving_distractor=moving_distractor, clutter=clutter,
+            occlusions=tuple(occ), distortion=not no_distortion,
             declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images,
             **({"recorded": recorded.strftime("%Y-%m-%dT%H:%M:%S")} if recorded else {}))
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out

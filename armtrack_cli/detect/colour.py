@@ -36,3 +36,20 @@ def hs_histogram(hsv: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
     h = cv2.calcHist([hsv], [0, 1], mask, list(HS_BINS), HS_RANGES)
     total = float(h.sum())
     return h / total if total > 0 else h
+
+
+HUE_BINS = 180  # one bin per OpenCV hue unit (2°): a slightly other dye falls in other bins
+
+
+def hue_distribution(hsv: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(HUE_BINS, 1) float32 hue histogram of the masked pixels, summing to 1 (all zero
+    without pixels)."""
+    h = cv2.calcHist([hsv], [0], mask, [HUE_BINS], [0, 180])
+    total = float(h.sum())
+    return h / total if total > 0 else h
+
+
+def bhattacharyya(a: np.ndarray, b: np.ndarray) -> float:
+    """Bhattacharyya distance √(1 − Σ √(a·b)) of two histograms that each sum to 1: 0 for the
+    same distribution, 1 for disjoint ones (OpenCV's HISTCMP_BHATTACHARYYA)."""
+    return float(cv2.compareHist(a, b, cv2.HISTCMP_BHATTACHARYYA))

@@ -1,22 +1,31 @@
-"""The wrist patch by CamShift (Tao & Hu 2008, section III-B; Bradski 1998).
+"""The wrist patch by CamShift (Tao & Hu 2008, section III-B; Bradski 1998), with an
+appearance check so that ``ok = 1`` means "this is the patch" (issue 14).
 
-Each frame: the hue back-projection of the patch's histogram, masked by the saturation/value
-limits. Every candidate region is followed by its own CamShift window (a tracklet), carried
-from frame to frame. A tracklet ends when its window loses its mass (occlusion, leaving the
-image), jumps, or merges with another's. Because detect runs offline over the whole video,
-the patch is then chosen among tracklets by what only it does: it moves with the arm. A
-region that never moves (a cup of the same hue on the table) is a distractor and is never
-reported. Frames without the patch's tracklet are ``ok = 0`` with no position.
+Tracking: CamShift on the hue back-projection (masked by the S/V limits) of a search region
+around the patch's last window only (HSV conversion included), so a frame costs the region,
+not the image. The window is accepted when it holds what the patch looked like
+(detect/patch_check.py: hue histogram, mass, aspect, one region) and has not jumped.
+
+Acquiring (the first frames, and whenever the check fails): the whole frame. Every candidate
+region is followed by its own CamShift window (a tracklet); once the patch has been seen,
+only regions that look like it are candidates. A tracklet is taken as the patch when it
+moves (the patch moves with the arm: a same-hue cup on the table never does), or when it
+appears close to where and soon after the patch was lost (it came back at rest). Because
+detect runs offline, the frames of that tracklet are then reported too. Until then frames
+are ``ok = 0`` with no position. If nothing ever moves, the largest region of the first
+frame is the patch.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from statistics import median
 
 import cv2
 import numpy as np
 
 from armtrack_cli.detect.colour import hue_histogram, range_mask
+from armtrack_cli.detect.patch_check import Reference, aspect_of, look
 from armtrack_cli.detect.regions import Regions
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
@@ -27,7 +36,13 @@ _OPEN = np.ones((3, 3), np.uint8)
 class PatchSettings:
     min_area_px: int = 25  # smallest region taken as a candidate
     max_jump_px: float = 60.0  # a window moving farther in one frame is a new tracklet
-    lost_fraction: float = 0.35  # window mass below this share of its running median: lost
+    lost_fraction: float = 0.7  # window mass below this share of its running median: lost
+    max_growth: float = 1.3  # … above this share: something else joined the window: lost
+    max_aspect: float = 3.0  # a window longer than this times its width is not the patch
+    max_aspect_change: float = 1.4  # … nor one this much longer than its running median
+    max_hue_distance: float = 0.5  # Bhattacharyya distance to the reference hue histogram
+    ref_frames: int = 15  # the reference hue histogram: the patch's first accepted frames
+    search_px: int = 40  # the search region: the last window grown by this on every side
     move_px: float = 12.0  # a tracklet whose positions spread farther than this moves
     relink_px: float = 40.0  # a still tracklet starting this close to where the patch was lost
     relink_s: float = 2.0  # within this time is the patch come back (at rest)
@@ -40,11 +55,19 @@ class Tracklet:
     frames: list[int] = field(default_factory=list)
     rects: list[tuple[float, float, float, float, float]] = field(default_factory=list)
     masses: list[float] = field(default_factory=list)
+    looks: list = field(default_factory=list)
     alive: bool = True
 
     def spread(self) -> float:
         p = np.array([r[:2] for r in self.rects])
         return float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1))) if len(p) else 0.0
+
+    def add(self, frame: int, rect, mass: float, seen) -> None:
+        (cx, cy), (rw, rh), ang = rect
+        self.frames.append(frame)
+        self.rects.append((cx, cy, rw, rh, ang))
+        self.masses.append(mass)
+        self.looks.append(seen)
 
 
 def back_projection(hsv: np.ndarray, hist: np.ndarray, low, high) -> np.ndarray:
@@ -74,29 +97,109 @@ def patch_mask(hsv: np.ndarray, low, high) -> np.ndarray:
 class PatchTracker:
     """Feed frames in order with ``step``; read per-frame detections with ``detections``."""
 
-    def __init__(self, low, high, settings: PatchSettings = PatchSettings()):
-        self.low, self.high, self.s = low, high, settings
+    def __init__(self, low, high, settings: PatchSettings = PatchSettings(), *,
+                 fps: float = 30.0):
+        self.low, self.high, self.s, self.fps = low, high, settings, fps
         self.hist = hue_histogram(int(low[0]), int(high[0]))
-        self.tracklets: list[Tracklet] = []
-        self.active: list[Tracklet] = []  # the live ones, in creation order
+        self.ref = Reference(settings.ref_frames)
+        self.out = np.full((1024, 6), np.nan)  # u, v, w, h, angle, ok; grown by doubling
         self.n_frames = 0
+        self.window: tuple[int, int, int, int] | None = None  # set while tracking
+        self.last = (np.nan, np.nan, -1)  # u, v and frame of the last accepted detection
+        self.vel = (0.0, 0.0)  # px per frame
+        self.tracklets: list[Tracklet] = []  # this acquisition's, while acquiring
+        self.active: list[Tracklet] = []
+        self.patches = 0  # tracklets taken as the patch so far
 
+    # --- per frame
     def step(self, frame_index: int, bgr: np.ndarray) -> None:
+        if frame_index >= self.out.shape[0]:
+            grown = np.full((2 * max(frame_index, self.out.shape[0]), 6), np.nan)
+            grown[:self.out.shape[0]] = self.out
+            self.out = grown
+        self.out[frame_index, 5] = 0
+        self.n_frames = max(self.n_frames, frame_index + 1)
+        if self.window is not None and self._track(frame_index, bgr):
+            return
+        self.window = None
+        self._acquire(frame_index, bgr)
+
+    def _search_region(self, shape) -> tuple[int, int, int, int]:
+        x, y, w, h = self.window
+        dx, dy = int(round(self.vel[0])), int(round(self.vel[1]))
+        m = self.s.search_px
+        H, W = shape[:2]
+        return (max(0, x + dx - m), max(0, y + dy - m), min(W, x + dx + w + m),
+                min(H, y + dy + h + m))
+
+    def _track(self, i: int, bgr: np.ndarray) -> bool:
+        """CamShift in the search region around the last window; True if the patch is there."""
+        x0, y0, x1, y1 = self._search_region(bgr.shape)
+        hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
+        mask = cv2.morphologyEx(range_mask(hsv, self.low, self.high), cv2.MORPH_OPEN, _OPEN)
+        x, y, w, h = self.window
+        start = (x + int(round(self.vel[0])) - x0, y + int(round(self.vel[1])) - y0, w, h)
+        rect, win = cv2.CamShift(mask, start, TERM)
+        wx, wy, ww, wh = win
+        H, W = bgr.shape[:2]
+        # a window at the region's edge (not the image's) may hold only part of what is there
+        if ww <= 0 or wh <= 0 or (wx == 0 and x0 > 0) or (wy == 0 and y0 > 0) or (
+                wx + ww >= x1 - x0 and x1 < W) or (wy + wh >= y1 - y0 and y1 < H):
+            return False
+        (cx, cy), size, ang = rect
+        if not (0 <= cx < x1 - x0 and 0 <= cy < y1 - y0) or mask[int(cy), int(cx)] == 0:
+            return False
+        seen = look(hsv, mask, win, rect)
+        u, v = cx + x0, cy + y0
+        if np.hypot(u - self.last[0], v - self.last[1]) > self.s.max_jump_px or \
+                self.ref.failure(seen, self.s):
+            return False
+        self._accept(i, ((u, v), size, ang), (wx + x0, wy + y0, ww, wh), seen)
+        return True
+
+    def _accept(self, i: int, rect, window, seen) -> None:
+        (u, v), (rw, rh), ang = rect
+        if self.last[2] == i - 1:
+            self.vel = (u - self.last[0], v - self.last[1])
+        else:
+            self.vel = (0.0, 0.0)
+        self.out[i] = (u, v, rw, rh, ang, 1)
+        self.last = (u, v, i)
+        self.window = tuple(int(c) for c in window)
+        self.ref.add(seen)
+
+    # --- acquiring
+    def _acquire(self, i: int, bgr: np.ndarray) -> None:
         hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
         bp = patch_mask(hsv, self.low, self.high)
         regions = Regions(bp)
-        n, stats = regions.n, regions.stats
+        claimed = self._follow(i, hsv, bp, regions)
+        self._start(i, hsv, bp, regions, claimed)
+        self.active = [t for t in self.active if t.alive]
+        for t in self.active:
+            if self._is_patch(t):
+                self._adopt(t)
+                return
+
+    def _candidate(self, hsv, bp, rect, window) -> tuple[bool, object]:
+        """Whether a window looks like the patch (any compact one before it has been seen)."""
+        seen = look(hsv, bp, window, rect)
+        if self.ref.hist is None:
+            return seen.aspect <= self.s.max_aspect, seen
+        return not self.ref.failure(seen, self.s), seen
+
+    def _follow(self, i: int, hsv, bp, regions) -> dict[int, Tracklet]:
+        """Carry every tracklet's window one frame; end those that lost or merged."""
         claimed: dict[int, Tracklet] = {}
         h, w = bp.shape
         for tr in self.active:
             rect, window = cv2.CamShift(bp, tr.window, TERM)
-            (cx, cy), (rw, rh), ang = rect
+            (cx, cy), _, _ = rect
             x, y, ww, wh = window
-            mass = float(bp[y:y + wh, x:x + ww].sum()) / 255.0 if ww > 0 and wh > 0 else 0.0
-            ref = np.median(tr.masses[-30:]) if tr.masses else mass
-            inside = 0 <= cx < w and 0 <= cy < h
-            lab = regions.label_at(cx, cy) if inside else 0
-            jump = np.hypot(cx - tr.rects[-1][0], cy - tr.rects[-1][1]) if tr.rects else 0.0
+            mass = float(cv2.countNonZero(bp[y:y + wh, x:x + ww])) if ww > 0 and wh > 0 else 0.0
+            ref = median(tr.masses[-30:])
+            lab = regions.label_at(cx, cy) if 0 <= cx < w and 0 <= cy < h else 0
+            jump = np.hypot(cx - tr.rects[-1][0], cy - tr.rects[-1][1])
             if (mass < self.s.min_area_px or mass < self.s.lost_fraction * ref or lab == 0
                     or jump > self.s.max_jump_px):
                 tr.alive = False
@@ -105,56 +208,60 @@ class PatchTracker:
                 claimed[lab].alive = False
                 tr.alive = False
                 continue
+            ok, seen = self._candidate(hsv, bp, rect, window)
+            if not ok:
+                tr.alive = False
+                continue
             claimed[lab] = tr
             tr.window = window
-            tr.frames.append(frame_index)
-            tr.rects.append((cx, cy, rw, rh, ang))
-            tr.masses.append(mass)
-        for lab in range(1, n):
-            if lab in claimed or stats[lab, cv2.CC_STAT_AREA] < self.s.min_area_px:
+            tr.add(i, rect, mass, seen)
+        return claimed
+
+    def _start(self, i: int, hsv, bp, regions, claimed) -> None:
+        """A new tracklet on every unclaimed region that could be the patch."""
+        h, w = bp.shape
+        for lab in range(1, regions.n):
+            if lab in claimed or regions.stats[lab, cv2.CC_STAT_AREA] < self.s.min_area_px:
                 continue
-            x, y, ww, wh = (int(v) for v in stats[lab, :4])
+            x, y, ww, wh = (int(v) for v in regions.stats[lab, :4])
             rect, window = cv2.CamShift(bp, (x, y, ww, wh), TERM)
-            (cx, cy), (rw, rh), ang = rect
+            (cx, cy), size, ang = rect
             if not (0 <= cx < w and 0 <= cy < h) or regions.label_at(cx, cy) != lab:
-                cx, cy = x + ww / 2, y + wh / 2
+                rect = ((x + ww / 2, y + wh / 2), size, ang)
+            ok, seen = self._candidate(hsv, bp, rect, window)
+            if not ok:
+                continue
             tr = Tracklet(len(self.tracklets), window)
-            tr.frames.append(frame_index)
-            tr.rects.append((cx, cy, rw, rh, ang))
-            tr.masses.append(float(stats[lab, cv2.CC_STAT_AREA]))
+            tr.add(i, rect, float(regions.stats[lab, cv2.CC_STAT_AREA]), seen)
             self.tracklets.append(tr)
             self.active.append(tr)
-        self.active = [t for t in self.active if t.alive]
-        self.n_frames = max(self.n_frames, frame_index + 1)
 
-    def patch_tracklets(self, fps: float) -> list[Tracklet]:
-        """The tracklets that are the patch: the moving ones, and a still one that begins
-        where and soon after the patch was lost (it came back while the arm rested)."""
-        moving = [t for t in self.tracklets if t.spread() > self.s.move_px]
-        if not moving:  # nothing ever moved: the largest region of the first frame
+    def _is_patch(self, t: Tracklet) -> bool:
+        """It moves, or it appeared close to where and soon after the patch was lost."""
+        if t.spread() > self.s.move_px:
+            return True
+        u, v, last = self.last
+        return last >= 0 and (t.frames[0] - last) / self.fps <= self.s.relink_s and np.hypot(
+            t.rects[0][0] - u, t.rects[0][1] - v) <= self.s.relink_px
+
+    def _adopt(self, t: Tracklet) -> None:
+        """Report the tracklet's frames as the patch and track it from its last window."""
+        for f, r, seen in zip(t.frames, t.rects, t.looks):
+            self.out[f] = (*r, 1)
+            self.ref.add(seen)
+        self.last = (t.rects[-1][0], t.rects[-1][1], t.frames[-1])
+        consecutive = len(t.frames) > 1 and t.frames[-2] == t.frames[-1] - 1
+        self.vel = (t.rects[-1][0] - t.rects[-2][0], t.rects[-1][1] - t.rects[-2][1]) \
+            if consecutive else (0.0, 0.0)
+        self.window = tuple(int(c) for c in t.window)
+        self.tracklets, self.active = [], []
+        self.patches += 1
+
+    def detections(self, fps: float | None = None) -> np.ndarray:
+        """(n_frames, 6): u, v, width, height, angle (deg), ok — NaN position where not ok.
+        (``fps`` is the tracker's own, given at construction; kept for callers.)"""
+        if self.patches == 0:  # nothing ever moved: the largest region of the first frame
             first = [t for t in self.tracklets if t.frames and t.frames[0] == 0]
-            return [max(first, key=lambda t: np.median(t.masses))] if first else []
-        chosen = {t.id for t in moving}
-        for t in sorted(self.tracklets, key=lambda t: t.frames[0]):
-            if t.id in chosen:
-                continue
-            before = [c for c in self.tracklets if c.id in chosen and c.frames[-1] < t.frames[0]]
-            if not before:
-                continue
-            last = max(before, key=lambda c: c.frames[-1])
-            gap = (t.frames[0] - last.frames[-1]) / fps
-            d = np.hypot(t.rects[0][0] - last.rects[-1][0], t.rects[0][1] - last.rects[-1][1])
-            if gap <= self.s.relink_s and d <= self.s.relink_px:
-                chosen.add(t.id)
-        return [t for t in self.tracklets if t.id in chosen]
-
-    def detections(self, fps: float) -> np.ndarray:
-        """(n_frames, 6): u, v, width, height, angle (deg), ok — NaN position where not ok."""
-        out = np.full((self.n_frames, 6), np.nan)
-        out[:, 5] = 0
-        for t in self.patch_tracklets(fps):
-            for f, r in zip(t.frames, t.rects):
-                if out[f, 5] == 1:  # two patch tracklets in one frame: keep the steadier one
-                    continue
-                out[f] = (*r, 1)
-        return out
+            if first:
+                self._adopt(max(first, key=lambda t: np.median(t.masses)))
+        return self.out[:self.n_frames].copy()

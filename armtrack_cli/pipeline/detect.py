@@ -44,7 +44,8 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
             raise ConfigError(session.toml_path, "[camera] patch is missing, which detect needs",
                               "add patch = { hsv_low = [H, S, V], hsv_high = [H, S, V] }")
         settings = section(doc, "detect.patch", PatchSettings, where)
-        tracker = PatchTracker(session.camera.patch.low, session.camera.patch.high, settings)
+        tracker = PatchTracker(session.camera.patch.low, session.camera.patch.high, settings,
+                               fps=video.fps)
         for i, _, img in iter_frames_ahead(video):
             tracker.step(i, img)
             if on_frame:

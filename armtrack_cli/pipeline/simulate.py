@@ -62,6 +62,8 @@ def simulate_command(name: str, settings: ArmSimSettings, imu_format: str) -> st
                      f" {v:g}")
     parts += [f"--occlusion {a:g}:{b:g}" for a, b in settings.occlusions]
     parts += [flag for flag, on in (("--distractor", settings.distractor),
+                                    ("--moving-distractor", settings.moving_distractor),
+                                    ("--clutter", settings.clutter),
                                     ("--no-distortion", not settings.distortion),
                                     ("--undeclared-imu-offset", not settings.declare_imu_offset))
               if on]

@@ -14,7 +14,7 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.simulate import imu_model, kinematics, render
+from armtrack_cli.simulate import distractors, imu_model, kinematics, render
 from armtrack_cli.simulate.camera import default_camera, project
 from armtrack_cli.simulate.capture import (
     QTM_TO_WORLD,
@@ -41,6 +41,8 @@ class ArmSimSettings(CaptureSettings):
     drop_rate: float = 0.0  # fraction of IMU packets dropped (in short bursts)
     forearm_axis: str = "+y"
     distractor: bool = False
+    moving_distractor: bool = False  # the other arm in a sleeve of the patch's hue (distractors.py)
+    clutter: bool = False  # objects of many colours on the table
     occlusions: tuple[tuple[float, float], ...] = ()  # (start s, duration s) of a card over the patch
     imu_offset_s: float = -1.0  # session time = IMU time + offset
     recorded: str = "2026-11-20T10:15:00"  # session.toml [session] recorded (local time)
@@ -74,7 +76,9 @@ class ArmSimulation:
                 wrist=tr["frame_wrist"][i], q_WB=tr["frame_q_WB"][i],
                 forearm_unit_B=_axis_unit(s.forearm_axis),
                 distractor_W=DISTRACTOR_W if s.distractor else None,
-                occluder=bool(self.occluded[i]), gain=gain, noise=noise)
+                occluder=bool(self.occluded[i]), gain=gain, noise=noise,
+                other_arm=(tr["frame_other_elbow"][i], tr["frame_other_wrist"][i])
+                if s.moving_distractor else None)
             yield i, img
 
 
@@ -82,6 +86,18 @@ def _axis_unit(axis: str) -> np.ndarray:
     v = np.zeros(3)
     v["xyz".index(axis[1])] = 1.0 if axis[0] == "+" else -1.0
     return v
+
+
+def _other_arm(s: ArmSimSettings, scene: render.Scene, fs, frame_t: np.ndarray) -> dict:
+    """Truth of the other arm (frame_other_*: elbow, wrist in W, wrist pixel) and the share of
+    the patch it hides in each frame (frame_patch_covered); none without it."""
+    if not s.moving_distractor:
+        return {}
+    elbow, wrist = distractors.other_arm(frame_t, np.array(s.centre))
+    covered = np.array([render.patch_covered(scene, fs.wrist[i], fs.q_WB[i], (elbow[i], wrist[i]))
+                        for i in range(frame_t.size)])
+    return {"frame_other_elbow": elbow, "frame_other_wrist": wrist,
+            "frame_other_wrist_px": project(scene.cam, wrist)[0], "frame_patch_covered": covered}
 
 
 def _drops(n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
@@ -126,7 +142,10 @@ def simulate_arm(s: ArmSimSettings) -> ArmSimulation:
     # --- scene and truth
     board = make_board(BOARD["squares"], BOARD["square_m"], BOARD["marker_m"],
                           BOARD["dictionary"])
-    scene = render.build_scene(cam, board, BOARD["square_m"], PATCH_BGR, rng)
+    scene = render.build_scene(cam, board, BOARD["square_m"], PATCH_BGR, rng,
+                               (*PATCH_HSV, np.random.default_rng([s.seed, 31]))
+                               if s.clutter else None)
+    other = _other_arm(s, scene, fs, frame_t)
     wrist_px, _ = project(cam, fs.wrist)
     eye = cam.centre_W
     facing = np.einsum("ni,ni->n", quat.rotate(fs.q_WB, [0.0, 0, 1]), eye - fs.wrist) > 0
@@ -140,7 +159,9 @@ def simulate_arm(s: ArmSimSettings) -> ArmSimulation:
         "q_WB": ds.q_WB, "omega_B": ds.omega_B,
         "frame_t": frame_t, "frame_wrist": fs.wrist, "frame_elbow": fs.elbow,
         "frame_shoulder": fs.shoulder, "frame_q_WB": fs.q_WB, "frame_wrist_px": wrist_px,
-        "frame_patch_visible": facing & inside & ~occluded, "frame_occluded": occluded,
+        "frame_patch_visible": facing & inside & ~occluded & (
+            other.get("frame_patch_covered", np.zeros(frame_t.size)) == 0),
+        "frame_occluded": occluded, **other,
         "distractor_px": project(cam, DISTRACTOR_W[None])[0][0] if s.distractor else
         np.full(2, np.nan),
         "imu_t_session": imu["t"] + s.imu_offset_s, "imu_q_true": st.q_WB[keep],

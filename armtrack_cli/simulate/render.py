@@ -15,6 +15,7 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.simulate import distractors
 from armtrack_cli.simulate.camera import pixel_rays, project
 
 TEX_MM = 1.0  # texture resolution, mm per pixel
@@ -35,9 +36,10 @@ class Scene:
     patch_side_m: float = 0.035
 
 
-def table_texture(board_img: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def table_texture(board_img: np.ndarray, rng: np.random.Generator, clutter=None) -> np.ndarray:
     """A light grey laminate table (as in many clinics; a wooden one would be skin-coloured)
-    at TEX_MM per pixel, with the board placed at W's origin (y_W ≤ 0)."""
+    at TEX_MM per pixel, with the board placed at W's origin (y_W ≤ 0); ``clutter``
+    (patch HSV low, high, generator) adds objects of many colours (distractors.py)."""
     h = int(round((TEX_Y[1] - TEX_Y[0]) * 1000 / TEX_MM))
     w = int(round((TEX_X[1] - TEX_X[0]) * 1000 / TEX_MM))
     grain = cv2.GaussianBlur(rng.standard_normal((h, w // 8)).astype(np.float32), (0, 0), 3)
@@ -47,16 +49,21 @@ def table_texture(board_img: np.ndarray, rng: np.random.Generator) -> np.ndarray
     bh, bw = board_img.shape[:2]
     r0 = int(round((-bh * TEX_MM / 1000 - TEX_Y[0]) * 1000 / TEX_MM))  # board spans y_W ∈ [-h, 0]
     c0 = int(round((0 - TEX_X[0]) * 1000 / TEX_MM))
+    if clutter is not None:
+        low, high, crng = clutter
+        distractors.clutter_texture(tex, (int(low[0]), int(high[0])), int(low[1]),
+                                    (c0, r0, c0 + bw, r0 + bh), crng)
     # board pixel (c, r) is board point (c, r)·s, i.e. W (c·s, −r·s): rows flip with y
     tex[r0:r0 + bh, c0:c0 + bw] = cv2.cvtColor(np.flipud(board_img), cv2.COLOR_GRAY2BGR)
     return tex
 
 
-def build_scene(cam: CameraModel, board, square_m: float, patch_bgr, rng) -> Scene:
+def build_scene(cam: CameraModel, board, square_m: float, patch_bgr, rng,
+                clutter=None) -> Scene:
     squares = board.getChessboardSize()
     px_per_sq = int(round(square_m * 1000 / TEX_MM))
     board_img = board.generateImage((squares[0] * px_per_sq, squares[1] * px_per_sq), marginSize=0)
-    tex = table_texture(board_img, rng)
+    tex = table_texture(board_img, rng, clutter)
     rays = pixel_rays(cam)  # (H, W, 3) in C
     d_W = rays @ cam.R_WC  # ray directions in W (R_WCᵀ · ray)
     eye = cam.centre_W
@@ -101,6 +108,31 @@ def _limb(img, cam, a: np.ndarray, b: np.ndarray, radius: float, colour: np.ndar
                        tuple(float(c) for c in colour * shade), -1, cv2.LINE_AA, SHIFT)
 
 
+def _split_other_arm(cam, wrist, other_arm, segs) -> tuple[list, list]:
+    """The arm's segments with the other arm's that lie behind the wrist, and those in front
+    of it (far first)."""
+    wrist_depth = project(cam, wrist[None])[1][0]
+    behind, front = list(segs), []
+    for seg in distractors.other_arm_segments(*other_arm, SKIN):
+        depth = project(cam, np.stack(seg[:2]))[1].mean()
+        (front if depth < wrist_depth else behind).append((depth, seg) if depth < wrist_depth
+                                                          else seg)
+    return behind, [seg for _, seg in sorted(front, key=lambda f: -f[0])]
+
+
+def patch_covered(scene: Scene, wrist, q_WB, other_arm) -> float:
+    """Share of the patch's image hidden by the other arm (0: none, 1: all)."""
+    cam = scene.cam
+    mask = np.zeros((cam.height, cam.width), np.uint8)
+    _poly(mask, project(cam, patch_corners(wrist, q_WB, scene.patch_side_m))[0], (255,))
+    whole = cv2.countNonZero(mask)
+    if whole == 0:
+        return 0.0
+    for a, b, radius, _ in _split_other_arm(cam, wrist, other_arm, [])[1]:
+        _limb(mask, cam, a, b, radius, np.zeros(1), shades=((1.0, 1.0),))
+    return 1.0 - cv2.countNonZero(mask) / whole
+
+
 def patch_corners(wrist: np.ndarray, q_WB: np.ndarray, side: float) -> np.ndarray:
     """(4, 3) corners in W of the square patch in B's x-y plane, centred on the wrist joint."""
     h = side / 2
@@ -109,9 +141,11 @@ def patch_corners(wrist: np.ndarray, q_WB: np.ndarray, side: float) -> np.ndarra
 
 
 def draw_frame(scene: Scene, *, shoulder, elbow, wrist, q_WB, forearm_unit_B,
-               distractor_W=None, occluder=False, gain: float = 1.0,
+               distractor_W=None, occluder=False, other_arm=None, gain: float = 1.0,
                noise: np.ndarray | None = None) -> tuple[np.ndarray, bool]:
-    """One BGR frame and whether the patch is visible (facing the camera, not occluded)."""
+    """One BGR frame and whether the patch is visible (facing the camera, not occluded).
+    ``other_arm`` (elbow, wrist in W) draws the other arm in its sleeve (distractors.py),
+    over the patch where it is nearer the camera."""
     cam = scene.cam
     img = scene.background.copy()
     if distractor_W is not None:
@@ -123,6 +157,10 @@ def draw_frame(scene: Scene, *, shoulder, elbow, wrist, q_WB, forearm_unit_B,
     segs = [(shoulder, elbow, 0.045, SLEEVE), (elbow, wrist, 0.034, SKIN),
             (wrist, wrist + 0.085 * hand_dir, 0.032, SKIN)]
     depths = [project(cam, np.stack([a, b]))[1].mean() for a, b, _, _ in segs]
+    front = []
+    if other_arm is not None:  # behind the wrist: drawn with the arm; in front: after the patch
+        segs, front = _split_other_arm(cam, wrist, other_arm, segs)
+        depths = [project(cam, np.stack([a, b]))[1].mean() for a, b, _, _ in segs]
     for k in np.argsort(depths)[::-1]:  # painter's order: far first
         _limb(img, cam, *segs[k])
     corners = patch_corners(wrist, q_WB, scene.patch_side_m)
@@ -133,6 +171,8 @@ def draw_frame(scene: Scene, *, shoulder, elbow, wrist, q_WB, forearm_unit_B,
     _poly(img, project(cam, sensor)[0], (45, 45, 45))
     if facing:
         _poly(img, project(cam, corners)[0], scene.patch_bgr)
+    for seg in front:
+        _limb(img, cam, *seg)
     if occluder:  # a grey card held between the camera and the wrist
         centre = project(cam, wrist[None])[0][0]
         _poly(img, centre + np.array([[-40, -30], [45, -35], [50, 40], [-35, 35]]), (150, 150, 150))
