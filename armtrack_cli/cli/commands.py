@@ -325,8 +325,8 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
-             distractor, moving_distractor, clutter, occlusions, no_distortion, calib_images, recorded, undeclared_imu_offset,
-             hides, clutter2, force, as_json, out_dir) -> None:
+             distractor, moving_distractor, clutter, occlusions, no_distortion, calib_images,
+             recorded, undeclared_imu_offset, hides, clutter2, force, as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
     occ = []

@@ -15,44 +15,47 @@ the patch only if what it holds looks like the patch did:
 from __future__ import annotations
 
 from collections import deque
-from statistics import median
 from dataclasses import dataclass
+from statistics import median
 
 import cv2
 import numpy as np
 
 from armtrack_cli.detect.colour import bhattacharyya, hue_distribution
 
-HISTORY = 8  # accepted frames in the running medians: the patch's image changes 2× in 1.5 s
+HISTORY = 8  # accepted frames in the running medians (the patch's image changes fast:)
+DOUBLING_S = 1.5  # its area changes up to 2× in this time as the arm moves (measured)
 
 
 @dataclass(frozen=True)
 class Look:
-    """What a window holds: mass (px), aspect (≥ 1), hue histogram, number of regions."""
+    """What a window holds: its region's mass (px), aspect (≥ 1), hue histogram and centroid
+    (u, v, sub-pixel), and the number of regions reaching into the window."""
 
     mass: float
     aspect: float
     hist: np.ndarray
     regions: int
+    centroid: tuple[float, float]
 
 
 def aspect_of(rw: float, rh: float) -> float:
     return max(rw, rh) / max(min(rw, rh), 1.0)
 
 
-SPECK_PX = 4  # a region this small in a window is noise; anything larger is something there
+SPECK_PX = 4  # a region this small is noise (the mask is opened); anything larger is something
 
 
-def look(hsv: np.ndarray, mask: np.ndarray, window, rect) -> Look:
-    """What the window (x, y, w, h) of ``mask`` (opened: no speckle) holds; ``rect`` is
-    CamShift's rotated box. A sliver of a neighbour at the window's edge counts as a region:
-    it pulls CamShift's centre by pixels."""
-    x, y, w, h = window
-    m = mask[y:y + h, x:x + w]
-    n, _, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
-    big = int((stats[1:, cv2.CC_STAT_AREA] >= SPECK_PX).sum())
-    return Look(float(cv2.countNonZero(m)), aspect_of(*rect[1]),
-                hue_distribution(hsv[y:y + h, x:x + w], m), big)
+def look(hsv: np.ndarray, regions, k: int, window, rect) -> Look:
+    """What CamShift's window (x, y, w, h; ``rect`` its rotated box) holds: region k of
+    ``regions`` (detect/regions.py, on the same pixels as ``hsv``) under its centre, and any
+    other region reaching into it (a sliver of a neighbour pulls CamShift's centre by pixels)."""
+    x, y, w, h = (int(v) for v in regions.stats[k, :4])
+    hist = hue_distribution(hsv[y:y + h, x:x + w], regions.mask_of(k))
+    others = regions.others_in(window, k, SPECK_PX)
+    c = regions.centroids[k]
+    return Look(float(regions.stats[k, cv2.CC_STAT_AREA]), aspect_of(*rect[1]), hist,
+                1 + others, (float(c[0]), float(c[1])))
 
 
 class Reference:
@@ -77,17 +80,20 @@ class Reference:
         self.masses.append(seen.mass)
         self.aspects.append(seen.aspect)
 
-    def failure(self, seen: Look, s) -> str:
-        """'' when ``seen`` looks like the patch under settings ``s``; else what differs."""
+    def failure(self, seen: Look, s, lost_s: float = 0.0) -> str:
+        """'' when ``seen`` looks like the patch under settings ``s``; else what differs. After
+        ``lost_s`` seconds without the patch, its size may have changed by 2^(lost_s /
+        DOUBLING_S): the mass and aspect bands widen by that much."""
+        slack = 2.0 ** (lost_s / DOUBLING_S)
         if seen.regions != 1:
             return "regions"
         if seen.aspect > s.max_aspect:
             return "aspect"
         if self.masses:
             ref = median(self.masses)
-            if not s.lost_fraction * ref <= seen.mass <= s.max_growth * ref:
+            if not s.lost_fraction * ref / slack <= seen.mass <= s.max_growth * ref * slack:
                 return "mass"
-            if seen.aspect > s.max_aspect_change * median(self.aspects):
+            if seen.aspect > s.max_aspect_change * slack * median(self.aspects):
                 return "aspect"
         ref_hist = self.hist
         if ref_hist is not None and bhattacharyya(ref_hist, seen.hist) > s.max_hue_distance:

@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 
 from armtrack_cli.detect.colour import hue_histogram, range_mask
-from armtrack_cli.detect.patch_check import Reference, aspect_of, look
+from armtrack_cli.detect.patch_check import HISTORY, Reference, look
 from armtrack_cli.detect.regions import Regions
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
@@ -110,6 +110,7 @@ class PatchTracker:
         self.tracklets: list[Tracklet] = []  # this acquisition's, while acquiring
         self.active: list[Tracklet] = []
         self.patches = 0  # tracklets taken as the patch so far
+        self._lost_s = 0.0  # time since the patch was last seen, while acquiring
 
     # --- per frame
     def step(self, frame_index: int, bgr: np.ndarray) -> None:
@@ -140,20 +141,23 @@ class PatchTracker:
         x, y, w, h = self.window
         start = (x + int(round(self.vel[0])) - x0, y + int(round(self.vel[1])) - y0, w, h)
         rect, win = cv2.CamShift(mask, start, TERM)
-        wx, wy, ww, wh = win
-        H, W = bgr.shape[:2]
-        # a window at the region's edge (not the image's) may hold only part of what is there
-        if ww <= 0 or wh <= 0 or (wx == 0 and x0 > 0) or (wy == 0 and y0 > 0) or (
-                wx + ww >= x1 - x0 and x1 < W) or (wy + wh >= y1 - y0 and y1 < H):
-            return False
         (cx, cy), size, ang = rect
         if not (0 <= cx < x1 - x0 and 0 <= cy < y1 - y0) or mask[int(cy), int(cx)] == 0:
             return False
-        seen = look(hsv, mask, win, rect)
-        u, v = cx + x0, cy + y0
+        regions = Regions(mask)
+        k = regions.label_at(cx, cy)
+        rx, ry, rw, rh = (int(v) for v in regions.stats[k, :4])
+        H, W = bgr.shape[:2]
+        # a region at the search region's edge (not the image's) may go on beyond it
+        if (rx == 0 and x0 > 0) or (ry == 0 and y0 > 0) or (rx + rw >= x1 - x0 and x1 < W) or (
+                ry + rh >= y1 - y0 and y1 < H):
+            return False
+        seen = look(hsv, regions, k, win, rect)
+        u, v = seen.centroid[0] + x0, seen.centroid[1] + y0
         if np.hypot(u - self.last[0], v - self.last[1]) > self.s.max_jump_px or \
                 self.ref.failure(seen, self.s):
             return False
+        wx, wy, ww, wh = win
         self._accept(i, ((u, v), size, ang), (wx + x0, wy + y0, ww, wh), seen)
         return True
 
@@ -170,6 +174,7 @@ class PatchTracker:
 
     # --- acquiring
     def _acquire(self, i: int, bgr: np.ndarray) -> None:
+        self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
         hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
         bp = patch_mask(hsv, self.low, self.high)
         regions = Regions(bp)
@@ -181,12 +186,13 @@ class PatchTracker:
                 self._adopt(t)
                 return
 
-    def _candidate(self, hsv, bp, rect, window) -> tuple[bool, object]:
-        """Whether a window looks like the patch (any compact one before it has been seen)."""
-        seen = look(hsv, bp, window, rect)
+    def _candidate(self, hsv, regions, k, rect, window) -> tuple[bool, object]:
+        """Whether window and region k look like the patch (before it has been seen: any
+        compact one)."""
+        seen = look(hsv, regions, k, window, rect)
         if self.ref.hist is None:
             return seen.aspect <= self.s.max_aspect, seen
-        return not self.ref.failure(seen, self.s), seen
+        return not self.ref.failure(seen, self.s, self._lost_s), seen
 
     def _follow(self, i: int, hsv, bp, regions) -> dict[int, Tracklet]:
         """Carry every tracklet's window one frame; end those that lost or merged."""
@@ -208,31 +214,29 @@ class PatchTracker:
                 claimed[lab].alive = False
                 tr.alive = False
                 continue
-            ok, seen = self._candidate(hsv, bp, rect, window)
+            ok, seen = self._candidate(hsv, regions, lab, rect, window)
             if not ok:
                 tr.alive = False
                 continue
             claimed[lab] = tr
             tr.window = window
-            tr.add(i, rect, mass, seen)
+            tr.add(i, (seen.centroid, *rect[1:]), mass, seen)
         return claimed
 
     def _start(self, i: int, hsv, bp, regions, claimed) -> None:
         """A new tracklet on every unclaimed region that could be the patch."""
-        h, w = bp.shape
         for lab in range(1, regions.n):
             if lab in claimed or regions.stats[lab, cv2.CC_STAT_AREA] < self.s.min_area_px:
                 continue
             x, y, ww, wh = (int(v) for v in regions.stats[lab, :4])
             rect, window = cv2.CamShift(bp, (x, y, ww, wh), TERM)
-            (cx, cy), size, ang = rect
-            if not (0 <= cx < w and 0 <= cy < h) or regions.label_at(cx, cy) != lab:
-                rect = ((x + ww / 2, y + wh / 2), size, ang)
-            ok, seen = self._candidate(hsv, bp, rect, window)
+            _, size, ang = rect
+            ok, seen = self._candidate(hsv, regions, lab, rect, window)
             if not ok:
                 continue
             tr = Tracklet(len(self.tracklets), window)
-            tr.add(i, rect, float(regions.stats[lab, cv2.CC_STAT_AREA]), seen)
+            tr.add(i, (seen.centroid, size, ang), float(regions.stats[lab, cv2.CC_STAT_AREA]),
+                   seen)
             self.tracklets.append(tr)
             self.active.append(tr)
 
@@ -245,10 +249,17 @@ class PatchTracker:
             t.rects[0][0] - u, t.rects[0][1] - v) <= self.s.relink_px
 
     def _adopt(self, t: Tracklet) -> None:
-        """Report the tracklet's frames as the patch and track it from its last window."""
-        for f, r, seen in zip(t.frames, t.rects, t.looks):
-            self.out[f] = (*r, 1)
-            self.ref.add(seen)
+        """Report the tracklet's frames as the patch and track it from its last window. Its
+        frames were checked against the patch as it was when lost (with a slack for the time
+        since); each is now also checked against the tracklet's own next frames, which drops
+        those where it was still partly hidden (coming out from under something)."""
+        mass = np.array([seen.mass for seen in t.looks])
+        for k, (f, r, seen) in enumerate(zip(t.frames, t.rects, t.looks)):
+            after = mass[k + 1:k + 1 + HISTORY] if k + 1 < mass.size else mass[-HISTORY:]
+            ref = float(np.median(after))
+            if self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
+                self.out[f] = (*r, 1)
+                self.ref.add(seen)
         self.last = (t.rects[-1][0], t.rects[-1][1], t.frames[-1])
         consecutive = len(t.frames) > 1 and t.frames[-2] == t.frames[-1] - 1
         self.vel = (t.rects[-1][0] - t.rects[-2][0], t.rects[-1][1] - t.rects[-2][1]) \

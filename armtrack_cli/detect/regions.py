@@ -19,18 +19,29 @@ class Regions:
             self.n, self.x0, self.y0 = 1, 0, 0
             self.labels = np.zeros((0, 0), np.int32)
             self.stats = np.zeros((1, 5), np.int32)
+            self.centroids = np.zeros((1, 2))
             return
         self.x0, self.y0 = x & ~1, y & ~1
-        self.n, self.labels, self.stats, _ = cv2.connectedComponentsWithStats(
+        self.n, self.labels, self.stats, self.centroids = cv2.connectedComponentsWithStats(
             mask[self.y0:y + h, self.x0:x + w], connectivity=8)
         self.stats[:, 0] += self.x0
         self.stats[:, 1] += self.y0
+        self.centroids += (self.x0, self.y0)
 
     def mask_of(self, k: int) -> np.ndarray:
         """uint8 (h, w) 0/1 mask of region k inside its bounding box (stats[k, :4])."""
         x, y, w, h = (int(v) for v in self.stats[k, :4])
         r, c = y - self.y0, x - self.x0
         return (self.labels[r:r + h, c:c + w] == k).astype(np.uint8)
+
+    def others_in(self, window, k: int, min_px: int) -> int:
+        """How many regions other than k have at least min_px pixels inside window (x, y, w, h)."""
+        x, y, w, h = window
+        r0, c0 = max(y - self.y0, 0), max(x - self.x0, 0)
+        sub = self.labels[r0:max(y + h - self.y0, 0), c0:max(x + w - self.x0, 0)]
+        counts = np.bincount(sub.ravel(), minlength=self.n)
+        counts[0] = counts[k] = 0
+        return int((counts >= min_px).sum())
 
     def label_at(self, u: float, v: float) -> int:
         """The region under pixel (u, v) (0: background)."""

@@ -93,7 +93,8 @@ def _other_arm(s: ArmSimSettings, scene: render.Scene, fs, frame_t: np.ndarray) 
     the patch it hides in each frame (frame_patch_covered); none without it."""
     if not s.moving_distractor:
         return {}
-    elbow, wrist = distractors.other_arm(frame_t, np.array(s.centre))
+    elbow, wrist = distractors.other_arm(frame_t, np.array(s.centre),
+                                         np.random.default_rng([s.seed, 37]))
     covered = np.array([render.patch_covered(scene, fs.wrist[i], fs.q_WB[i], (elbow[i], wrist[i]))
                         for i in range(frame_t.size)])
     return {"frame_other_elbow": elbow, "frame_other_wrist": wrist,

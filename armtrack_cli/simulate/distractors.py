@@ -15,7 +15,7 @@ import numpy as np
 
 SLEEVE_BGR = np.array([25.0, 60.0, 215.0])  # H ≈ 5.5 (OpenCV units) against the patch's ≈ 1.5
 ENTER_S = 3.0  # the other arm starts moving (after detect has found the patch)
-PERIOD_S = 5.0  # one sweep across and back
+PERIOD_S = 5.0  # one sweep across and back (± 20 % by seed)
 SWEEP_M = 0.30  # half-width of the sweep about the workspace centre, m
 HEIGHT_M = 0.17  # the other wrist above the table, m
 FOREARM_M = 0.26
@@ -29,15 +29,19 @@ CLUTTER_HUE_GAP = 6
 CLUTTER_COUNT = 30
 
 
-def other_arm(t: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(elbow, wrist), each (N, 3) in W, of the other arm at session times t (s)."""
+def other_arm(t: np.ndarray, centre: np.ndarray,
+              rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """(elbow, wrist), each (N, 3) in W, of the other arm at session times t (s); its pace,
+    path and height vary with the draws from ``rng``."""
     t = np.asarray(t, float)
+    period = PERIOD_S * rng.uniform(0.8, 1.2)
+    off, wobble = rng.uniform(-0.04, 0.04), rng.uniform(0, 2 * np.pi)
     moving = np.clip(t - ENTER_S, 0.0, None)
-    phase = 2 * np.pi * moving / PERIOD_S
+    phase = 2 * np.pi * moving / period
     wrist = np.stack([
         centre[0] + SWEEP_M * np.cos(phase),  # parked at the far side, then across and back
-        centre[1] + 0.08 * np.sin(phase / 2.3),  # each pass at another distance from the patch
-        np.full_like(t, HEIGHT_M) + 0.02 * np.sin(phase / 1.7),
+        centre[1] + off + 0.08 * np.sin(phase / 2.3 + wobble),  # each pass at another distance
+        np.full_like(t, HEIGHT_M) + 0.02 * np.sin(phase / 1.7 + wobble),
     ], -1)
     towards = centre + ELBOW_TOWARDS - wrist
     elbow = wrist + FOREARM_M * towards / np.linalg.norm(towards, axis=1, keepdims=True)
