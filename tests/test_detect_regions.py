@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from armtrack_cli.detect.colour import hue_histogram
-from armtrack_cli.detect.patch_tracker import back_projection, patch_mask
+from armtrack_cli.detect.patch_tracker import back_projection, patch_mask, sparse_patch_mask
 from armtrack_cli.detect.regions import Regions
 
 
@@ -62,3 +62,52 @@ def test_patch_mask_is_the_masked_back_projection(low, high, seed):
     hist = hue_histogram(low[0], high[0])
     np.testing.assert_array_equal(patch_mask(hsv, low, high),
                                   back_projection(hsv, hist, low, high))
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_others_in_a_window_and_centroids(seed):
+    """Regions.others_in against counting the labels of the whole-mask components inside the
+    window; centroids against the mean of each component's pixel coordinates."""
+    m = _blobs(seed)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(m, 8)
+    r = Regions(m)
+    rng = np.random.default_rng(seed)
+    for _ in range(20):
+        x, y = int(rng.integers(-5, m.shape[1])), int(rng.integers(-5, m.shape[0]))
+        w, h = int(rng.integers(1, 60)), int(rng.integers(1, 60))
+        k = int(rng.integers(0, n))
+        sub = labels[max(y, 0):max(y + h, 0), max(x, 0):max(x + w, 0)]
+        counts = np.bincount(sub.ravel(), minlength=n)
+        want = sum(1 for j in range(1, n) if j != k and counts[j] >= 4)
+        assert r.others_in((x, y, w, h), k, 4) == want
+    for k in range(1, n):
+        rows, cols = np.nonzero(labels == k)
+        np.testing.assert_allclose(r.centroids[k], (cols.mean(), rows.mean()), atol=1e-9)
+
+
+@pytest.mark.parametrize("low,high", [((0, 140, 90), (12, 255, 255)),
+                                      ((170, 140, 90), (10, 255, 255))])
+@pytest.mark.parametrize("seed", range(12))
+def test_sparse_patch_mask_is_the_patch_mask(low, high, seed):
+    """The half-resolution-guided mask of the acquiring pass against patch_mask on the whole
+    frame: noise everywhere (seed 0), or blobs of every size (down to single pixels and thin
+    lines, at odd and even offsets, on the edges) in and out of the range."""
+    rng = np.random.default_rng(seed)
+    hsv = np.dstack([rng.integers(0, 180, (121, 163)), rng.integers(0, 256, (121, 163)),
+                     rng.integers(0, 256, (121, 163))]).astype(np.uint8)
+    if seed:
+        plain = np.zeros_like(hsv)
+        plain[...] = (90, 30, 30)
+        keep = _blobs(seed, (121, 163)) > 0
+        plain[keep] = (low[0], 200, 200) if seed % 2 else hsv[keep]
+        plain[rng.integers(0, 121), 5:150] = (low[0], 200, 200)  # a 1-px line
+        plain[10:13, 20:23 + seed] = (high[0], 200, 200)  # a 3-px-high bar
+        hsv = plain
+    bgr = cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR)
+    hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)  # what the tracker sees
+    mask, hsv_out = np.full(hsv.shape[:2], 7, np.uint8), np.zeros_like(hsv)
+    sparse_patch_mask(bgr, low, high, hsv_out, mask)
+    want = patch_mask(hsv, low, high)
+    np.testing.assert_array_equal(mask, want)
+    on = want > 0
+    np.testing.assert_array_equal(hsv_out[on], hsv[on])

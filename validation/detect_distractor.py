@@ -101,17 +101,18 @@ def render(rows: list[dict], seeds: int, duration: float, seconds: float) -> str
                   f"Pooled: {ok} frames with ok = 1, {_pct(within)} within {GOAL_PX:g} px; "
                   f"worst session {_pct(worst)} — goal **{'met' if met else 'not met'}**.", "",
                   "| session | frames | visible | under the other arm | ok = 1 | within "
-                  f"{GOAL_PX:g} px | max error px | visible found | ok while hidden | "
-                  "frames/s |", "|---|---|---|---|---|---|---|---|---|---|"]
+                  f"{GOAL_PX:g} px | max error px | visible found | ok while hidden |",
+                  "|---|---|---|---|---|---|---|---|---|"]
         for r in sub:
             lines.append(f"| {r['session']} | {r['frames']} | {r['visible']} | {r['covered']} "
                          f"| {r['ok']} | {_pct(r['within'])} | {r['max_px']:.1f} | "
-                         f"{_pct(r['found'])} | {r['ok_hidden']} | {r['frames_per_s']:.0f} |")
+                         f"{_pct(r['found'])} | {r['ok_hidden']} |")
         lines.append("")
     lines += ["`visible found`: share of the frames where the patch is visible that are "
               "reported (ok = 1); `ok while hidden`: frames reported although the patch is not "
               "visible (under the card or the other arm, or turned away). With the check off, "
-              "CamShift's window follows the sleeve when it crosses the patch.", "",
+              "CamShift's window follows the sleeve when it crosses the patch. Detection speed "
+              "is in docs/benchmarks.md (`make bench`), not here.", "",
               f"Run time {seconds:.0f} s."]
     return "\n".join(lines) + "\n"
 

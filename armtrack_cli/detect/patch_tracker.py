@@ -94,6 +94,34 @@ def patch_mask(hsv: np.ndarray, low, high) -> np.ndarray:
     return out
 
 
+def sparse_patch_mask(bgr: np.ndarray, low, high, hsv_out: np.ndarray,
+                      mask_out: np.ndarray) -> None:
+    """patch_mask(cvtColor(bgr)) into ``mask_out``, computed at full resolution only in boxes
+    around what a half-resolution pass (every other row and column) finds; ``hsv_out`` gets
+    the HSV image inside those boxes (elsewhere it is stale). Exact: a pixel the 3 x 3
+    opening keeps lies in a 3 x 3 block of in-range pixels, which holds a pixel of even row
+    and column, so within 2 px of one the half-resolution pass sees; each box covers those by
+    2 px more, for the opening's own reach (tests check the equality with patch_mask)."""
+    mask_out.fill(0)
+    H, W = mask_out.shape
+    # nearest-neighbour halving takes one pixel of every 2 x 2 block (even row and column)
+    small = cv2.cvtColor(cv2.resize(bgr, ((W + 1) // 2, (H + 1) // 2),
+                                    interpolation=cv2.INTER_NEAREST), cv2.COLOR_BGR2HSV)
+    seen = cv2.dilate(range_mask(small, low, high), _OPEN)  # neighbours share a box
+    n, _, stats, _ = cv2.connectedComponentsWithStats(seen, connectivity=8)
+    for x, y, w, h, _ in stats[1:]:
+        # sampled pixels at full-res 2x (or 2x + 1) … 2(x + w - 1) (+ 1); kept pixels within 2
+        # of them (inner), the opening reads 2 px further (outer)
+        ix0, iy0, ix1, iy1 = max(2 * x - 2, 0), max(2 * y - 2, 0), min(2 * (x + w) + 2, W), \
+            min(2 * (y + h) + 2, H)
+        ox0, oy0, ox1, oy1 = max(ix0 - 2, 0), max(iy0 - 2, 0), min(ix1 + 2, W), min(iy1 + 2, H)
+        hsv = cv2.cvtColor(bgr[oy0:oy1, ox0:ox1], cv2.COLOR_BGR2HSV)
+        hsv_out[oy0:oy1, ox0:ox1] = hsv
+        opened = cv2.morphologyEx(range_mask(hsv, low, high), cv2.MORPH_OPEN, _OPEN)
+        inner = opened[iy0 - oy0:iy1 - oy0, ix0 - ox0:ix1 - ox0]
+        np.bitwise_or(mask_out[iy0:iy1, ix0:ix1], inner, out=mask_out[iy0:iy1, ix0:ix1])
+
+
 class PatchTracker:
     """Feed frames in order with ``step``; read per-frame detections with ``detections``."""
 
@@ -111,6 +139,7 @@ class PatchTracker:
         self.active: list[Tracklet] = []
         self.patches = 0  # tracklets taken as the patch so far
         self._lost_s = 0.0  # time since the patch was last seen, while acquiring
+        self._hsv = self._bp = None  # whole-frame buffers of the acquiring pass, reused
 
     # --- per frame
     def step(self, frame_index: int, bgr: np.ndarray) -> None:
@@ -175,8 +204,10 @@ class PatchTracker:
     # --- acquiring
     def _acquire(self, i: int, bgr: np.ndarray) -> None:
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
-        hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
-        bp = patch_mask(hsv, self.low, self.high)
+        if self._hsv is None or self._hsv.shape != bgr.shape:
+            self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
+        hsv, bp = self._hsv, self._bp
+        sparse_patch_mask(bgr, self.low, self.high, hsv, bp)
         regions = Regions(bp)
         claimed = self._follow(i, hsv, bp, regions)
         self._start(i, hsv, bp, regions, claimed)
