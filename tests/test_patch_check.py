@@ -129,3 +129,17 @@ def test_lost_then_back_moving_and_at_rest():
     np.testing.assert_array_equal(ok, ~hidden)
     assert err(d, truth)[ok].max() < 0.5
     assert np.isnan(d[hidden, :2]).all()  # missing is missing, never zero
+
+
+def test_leaving_the_image_fast():
+    """The patch runs out of the image at 12 px per frame and comes back: no error, ok = 0
+    while it is outside, on the patch whenever reported."""
+    rng = np.random.default_rng(6)
+    u = np.r_[np.full(5, 200.0), 200 + 12 * np.arange(1, 21), 440 - 12 * np.arange(1, 26)]
+    truth = np.stack([u, np.full(u.size, 120.0)], -1)
+    frames = [frame(rng, [("square", p, PATCH)]) for p in truth]
+    d = track(frames)
+    ok = d[:, 5] == 1
+    assert not ok[truth[:, 0] > W + SIDE / 2].any()
+    assert ok[truth[:, 0] < W - SIDE].sum() >= 25
+    assert err(d, truth)[ok].max() < 0.5

@@ -168,8 +168,12 @@ class PatchTracker:
         hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
         mask = cv2.morphologyEx(range_mask(hsv, self.low, self.high), cv2.MORPH_OPEN, _OPEN)
         x, y, w, h = self.window
-        start = (x + int(round(self.vel[0])) - x0, y + int(round(self.vel[1])) - y0, w, h)
-        rect, win = cv2.CamShift(mask, start, TERM)
+        sx, sy = x + int(round(self.vel[0])) - x0, y + int(round(self.vel[1])) - y0
+        sx0, sy0 = max(sx, 0), max(sy, 0)  # the start window, inside the search region
+        sw, sh = min(sx + w, x1 - x0) - sx0, min(sy + h, y1 - y0) - sy0
+        if sw <= 0 or sh <= 0:  # predicted out of the image
+            return False
+        rect, win = cv2.CamShift(mask, (sx0, sy0, sw, sh), TERM)
         (cx, cy), size, ang = rect
         if not (0 <= cx < x1 - x0 and 0 <= cy < y1 - y0) or mask[int(cy), int(cx)] == 0:
             return False
