@@ -57,13 +57,23 @@ class Tracklet:
     masses: list[float] = field(default_factory=list)
     looks: list = field(default_factory=list)
     alive: bool = True
+    box: tuple = ((0.0, 0.0), (0.0, 0.0))  # (min u, min v), (max u, max v) of the positions
 
     def spread(self) -> float:
+        """Farthest position from the median position, px."""
         p = np.array([r[:2] for r in self.rects])
         return float(np.max(np.linalg.norm(p - np.median(p, axis=0), axis=1))) if len(p) else 0.0
 
+    def moves(self, move_px: float) -> bool:
+        """spread() > move_px; the positions' box is checked first: no position is farther
+        from the median than the box's diagonal."""
+        (u0, v0), (u1, v1) = self.box
+        return np.hypot(u1 - u0, v1 - v0) > move_px and self.spread() > move_px
+
     def add(self, frame: int, rect, mass: float, seen) -> None:
         (cx, cy), (rw, rh), ang = rect
+        (u0, v0), (u1, v1) = self.box if self.rects else ((cx, cy), (cx, cy))
+        self.box = ((min(u0, cx), min(v0, cy)), (max(u1, cx), max(v1, cy)))
         self.frames.append(frame)
         self.rects.append((cx, cy, rw, rh, ang))
         self.masses.append(mass)
@@ -108,8 +118,8 @@ def sparse_patch_mask(bgr: np.ndarray, low, high, hsv_out: np.ndarray,
     small = cv2.cvtColor(cv2.resize(bgr, ((W + 1) // 2, (H + 1) // 2),
                                     interpolation=cv2.INTER_NEAREST), cv2.COLOR_BGR2HSV)
     seen = cv2.dilate(range_mask(small, low, high), _OPEN)  # neighbours share a box
-    n, _, stats, _ = cv2.connectedComponentsWithStats(seen, connectivity=8)
-    for x, y, w, h, _ in stats[1:]:
+    outlines, _ = cv2.findContours(seen, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    for x, y, w, h in map(cv2.boundingRect, outlines):  # each 8-connected group's box
         # sampled pixels at full-res 2x (or 2x + 1) … 2(x + w - 1) (+ 1); kept pixels within 2
         # of them (inner), the opening reads 2 px further (outer)
         ix0, iy0, ix1, iy1 = max(2 * x - 2, 0), max(2 * y - 2, 0), min(2 * (x + w) + 2, W), \
@@ -277,7 +287,7 @@ class PatchTracker:
 
     def _is_patch(self, t: Tracklet) -> bool:
         """It moves, or it appeared close to where and soon after the patch was lost."""
-        if t.spread() > self.s.move_px:
+        if t.moves(self.s.move_px):
             return True
         u, v, last = self.last
         return last >= 0 and (t.frames[0] - last) / self.fps <= self.s.relink_s and np.hypot(

@@ -22,8 +22,11 @@ class Regions:
             self.centroids = np.zeros((1, 2))
             return
         self.x0, self.y0 = x & ~1, y & ~1
-        self.n, self.labels, self.stats, self.centroids = cv2.connectedComponentsWithStats(
-            mask[self.y0:y + h, self.x0:x + w], connectivity=8)
+        # Grana's block-based labelling: OpenCV's default order, at about half the time of its
+        # default algorithm here (tests check labels, order and stats against the default)
+        self.n, self.labels, self.stats, self.centroids = \
+            cv2.connectedComponentsWithStatsWithAlgorithm(
+                mask[self.y0:y + h, self.x0:x + w], 8, cv2.CV_32S, cv2.CCL_GRANA)
         self.stats[:, 0] += self.x0
         self.stats[:, 1] += self.y0
         self.centroids += (self.x0, self.y0)
