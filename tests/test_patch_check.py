@@ -20,11 +20,13 @@ H, W, SIDE = 240, 320, 20.0
 
 def frame(rng, items) -> np.ndarray:
     """Grey frame with noise; items: (kind, centre (u, v), colour), kind 'square' (SIDE px) or
-    'bar' (60 x 12 px) or 'disc' (radius 11 px); sub-pixel edges, a little blur."""
+    'bar' (60 x 12 px) or 'disc' (radius 11 px) or 'dot' (radius 6 px); sub-pixel edges, a
+    little blur."""
     img = np.full((H, W, 3), 150, np.uint8)
     for kind, (u, v), colour in items:
-        if kind == "disc":
-            cv2.circle(img, (int(u * 16), int(v * 16)), 11 * 16, colour, -1, cv2.LINE_AA, 4)
+        if kind in ("disc", "dot"):
+            r = 11 if kind == "disc" else 6
+            cv2.circle(img, (int(u * 16), int(v * 16)), r * 16, colour, -1, cv2.LINE_AA, 4)
             continue
         hw, hh = (SIDE / 2, SIDE / 2) if kind == "square" else (30.0, 6.0)
         pts = np.array([[u - hw, v - hh], [u + hw, v - hh], [u + hw, v + hh], [u - hw, v + hh]])
@@ -116,14 +118,16 @@ def test_a_same_hue_bar_joining_the_window_is_not_the_patch():
 def test_lost_then_back_moving_and_at_rest():
     """Hidden frames 20-39 while moving: taken back once it has moved again, its first frames
     back reported too. Hidden frames 80-89 at rest: re-linked where it was lost at once. The
-    still disc of the patch's colour is never reported."""
+    still square like the patch, 37 px from where the patch was first lost (within
+    relink_px), is never reported: it was there when the patch was lost, so it is something
+    else."""
     rng = np.random.default_rng(5)
     moving = path(60, still=5)
     truth = np.vstack([moving, np.tile(moving[-1], (60, 1))])
     hidden = np.zeros(120, bool)
     hidden[20:40] = hidden[80:90] = True
     frames = [frame(rng, ([] if hidden[i] else [("square", truth[i], PATCH)])
-                    + [("disc", (60, 200), PATCH)]) for i in range(120)]
+                    + [("square", truth[19] - (0, 37), PATCH)]) for i in range(120)]
     d = track(frames)
     ok = d[:, 5] == 1
     np.testing.assert_array_equal(ok, ~hidden)

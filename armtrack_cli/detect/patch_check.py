@@ -8,8 +8,11 @@ the patch only if what it holds looks like the patch did:
   histogram over its first accepted frames);
 - its mass (pixels of the patch's colour) is within a band around the running median of the
   accepted masses, and its aspect (long over short side of CamShift's box) is within a factor
-  of their running median and below an absolute limit;
-- it holds one region, not two (a window straddling the patch and a neighbour is neither).
+  of their running median and below an absolute limit.
+
+What is checked and reported is the region under the window's centre, so a neighbour reaching
+into the window does not move the reported centre (the region's sub-pixel centroid; CamShift
+rounds its own); a neighbour touching the patch makes one region, too large to pass.
 """
 
 from __future__ import annotations
@@ -30,12 +33,11 @@ DOUBLING_S = 1.5  # its area changes up to 2× in this time as the arm moves (me
 @dataclass(frozen=True)
 class Look:
     """What a window holds: its region's mass (px), aspect (≥ 1), hue histogram and centroid
-    (u, v, sub-pixel), and the number of regions reaching into the window."""
+    (u, v, sub-pixel)."""
 
     mass: float
     aspect: float
     hist: np.ndarray
-    regions: int
     centroid: tuple[float, float]
 
 
@@ -43,19 +45,14 @@ def aspect_of(rw: float, rh: float) -> float:
     return max(rw, rh) / max(min(rw, rh), 1.0)
 
 
-SPECK_PX = 4  # a region this small is noise (the mask is opened); anything larger is something
-
-
 def look(hsv: np.ndarray, regions, k: int, window, rect) -> Look:
-    """What CamShift's window (x, y, w, h; ``rect`` its rotated box) holds: region k of
-    ``regions`` (detect/regions.py, on the same pixels as ``hsv``) under its centre, and any
-    other region reaching into it (a sliver of a neighbour pulls CamShift's centre by pixels)."""
+    """What CamShift's window (``rect`` its rotated box) holds: region k of ``regions``
+    (detect/regions.py, on the same pixels as ``hsv``), the one under its centre."""
     x, y, w, h = (int(v) for v in regions.stats[k, :4])
     hist = hue_distribution(hsv[y:y + h, x:x + w], regions.mask_of(k))
-    others = regions.others_in(window, k, SPECK_PX)
     c = regions.centroids[k]
     return Look(float(regions.stats[k, cv2.CC_STAT_AREA]), aspect_of(*rect[1]), hist,
-                1 + others, (float(c[0]), float(c[1])))
+                (float(c[0]), float(c[1])))
 
 
 class Reference:
@@ -85,8 +82,6 @@ class Reference:
         ``lost_s`` seconds without the patch, its size may have changed by 2^(lost_s /
         DOUBLING_S): the mass and aspect bands widen by that much."""
         slack = 2.0 ** (lost_s / DOUBLING_S)
-        if seen.regions != 1:
-            return "regions"
         if seen.aspect > s.max_aspect:
             return "aspect"
         if self.masses:

@@ -29,6 +29,7 @@ from armtrack_cli.detect.patch_check import HISTORY, Reference, look
 from armtrack_cli.detect.regions import Regions
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
+RELINK_SAME_PX = 10.0  # a region present when the patch was lost is the patch only this close
 _OPEN = np.ones((3, 3), np.uint8)
 
 
@@ -56,6 +57,7 @@ class Tracklet:
     rects: list[tuple[float, float, float, float, float]] = field(default_factory=list)
     masses: list[float] = field(default_factory=list)
     looks: list = field(default_factory=list)
+    good: list[bool] = field(default_factory=list)  # looked like the patch in that frame
     alive: bool = True
     box: tuple = ((0.0, 0.0), (0.0, 0.0))  # (min u, min v), (max u, max v) of the positions
 
@@ -70,7 +72,7 @@ class Tracklet:
         (u0, v0), (u1, v1) = self.box
         return np.hypot(u1 - u0, v1 - v0) > move_px and self.spread() > move_px
 
-    def add(self, frame: int, rect, mass: float, seen) -> None:
+    def add(self, frame: int, rect, mass: float, seen, good: bool) -> None:
         (cx, cy), (rw, rh), ang = rect
         (u0, v0), (u1, v1) = self.box if self.rects else ((cx, cy), (cx, cy))
         self.box = ((min(u0, cx), min(v0, cy)), (max(u1, cx), max(v1, cy)))
@@ -78,6 +80,7 @@ class Tracklet:
         self.rects.append((cx, cy, rw, rh, ang))
         self.masses.append(mass)
         self.looks.append(seen)
+        self.good.append(good)
 
 
 def back_projection(hsv: np.ndarray, hist: np.ndarray, low, high) -> np.ndarray:
@@ -149,6 +152,7 @@ class PatchTracker:
         self.active: list[Tracklet] = []
         self.patches = 0  # tracklets taken as the patch so far
         self._lost_s = 0.0  # time since the patch was last seen, while acquiring
+        self._episode = 0  # first frame of the current acquisition
         self._hsv = self._bp = None  # whole-frame buffers of the acquiring pass, reused
 
     # --- per frame
@@ -217,6 +221,8 @@ class PatchTracker:
 
     # --- acquiring
     def _acquire(self, i: int, bgr: np.ndarray) -> None:
+        if not self.tracklets:
+            self._episode = i  # the first frame of this acquisition
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
         if self._hsv is None or self._hsv.shape != bgr.shape:
             self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
@@ -260,16 +266,13 @@ class PatchTracker:
                 tr.alive = False
                 continue
             ok, seen = self._candidate(hsv, regions, lab, rect, window)
-            if not ok:
-                tr.alive = False
-                continue
             claimed[lab] = tr
             tr.window = window
-            tr.add(i, (seen.centroid, *rect[1:]), mass, seen)
+            tr.add(i, (seen.centroid, *rect[1:]), mass, seen, ok)
         return claimed
 
     def _start(self, i: int, hsv, bp, regions, claimed) -> None:
-        """A new tracklet on every unclaimed region that could be the patch."""
+        """A new tracklet on every unclaimed region."""
         for lab in range(1, regions.n):
             if lab in claimed or regions.stats[lab, cv2.CC_STAT_AREA] < self.s.min_area_px:
                 continue
@@ -277,21 +280,25 @@ class PatchTracker:
             rect, window = cv2.CamShift(bp, (x, y, ww, wh), TERM)
             _, size, ang = rect
             ok, seen = self._candidate(hsv, regions, lab, rect, window)
-            if not ok:
-                continue
             tr = Tracklet(len(self.tracklets), window)
             tr.add(i, (seen.centroid, size, ang), float(regions.stats[lab, cv2.CC_STAT_AREA]),
-                   seen)
+                   seen, ok)
             self.tracklets.append(tr)
             self.active.append(tr)
 
     def _is_patch(self, t: Tracklet) -> bool:
-        """It moves, or it appeared close to where and soon after the patch was lost."""
+        """It looks like the patch now, and it moves, or it appeared close to where and soon
+        after the patch was lost. A region already there when the patch was lost is something
+        else unless it is where the patch was heading (within RELINK_SAME_PX)."""
+        if not t.good[-1]:
+            return False
         if t.moves(self.s.move_px):
             return True
         u, v, last = self.last
-        return last >= 0 and (t.frames[0] - last) / self.fps <= self.s.relink_s and np.hypot(
-            t.rects[0][0] - u, t.rects[0][1] - v) <= self.s.relink_px
+        if last < 0 or (t.frames[0] - last) / self.fps > self.s.relink_s:
+            return False
+        near = self.s.relink_px if t.frames[0] > self._episode else RELINK_SAME_PX
+        return np.hypot(t.rects[0][0] - u - self.vel[0], t.rects[0][1] - v - self.vel[1]) <= near
 
     def _adopt(self, t: Tracklet) -> None:
         """Report the tracklet's frames as the patch and track it from its last window. Its
@@ -302,7 +309,7 @@ class PatchTracker:
         for k, (f, r, seen) in enumerate(zip(t.frames, t.rects, t.looks)):
             after = mass[k + 1:k + 1 + HISTORY] if k + 1 < mass.size else mass[-HISTORY:]
             ref = float(np.median(after))
-            if self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
+            if t.good[k] and self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
                 self.out[f] = (*r, 1)
                 self.ref.add(seen)
         self.last = (t.rects[-1][0], t.rects[-1][1], t.frames[-1])

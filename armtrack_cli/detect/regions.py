@@ -37,15 +37,6 @@ class Regions:
         r, c = y - self.y0, x - self.x0
         return (self.labels[r:r + h, c:c + w] == k).astype(np.uint8)
 
-    def others_in(self, window, k: int, min_px: int) -> int:
-        """How many regions other than k have at least min_px pixels inside window (x, y, w, h)."""
-        x, y, w, h = window
-        r0, c0 = max(y - self.y0, 0), max(x - self.x0, 0)
-        sub = self.labels[r0:max(y + h - self.y0, 0), c0:max(x + w - self.x0, 0)]
-        counts = np.bincount(sub.ravel(), minlength=self.n)
-        counts[0] = counts[k] = 0
-        return int((counts >= min_px).sum())
-
     def label_at(self, u: float, v: float) -> int:
         """The region under pixel (u, v) (0: background)."""
         r, c = int(v) - self.y0, int(u) - self.x0
