@@ -3,17 +3,18 @@ appearance check so that ``ok = 1`` means "this is the patch" (issue 14).
 
 Tracking: CamShift on the hue back-projection (masked by the S/V limits) of a search region
 around the patch's last window only (HSV conversion included), so a frame costs the region,
-not the image. The window is accepted when it holds what the patch looked like
-(detect/patch_check.py: hue histogram, mass, aspect, one region) and has not jumped.
+not the image. The window is accepted when its region looks like the patch did
+(detect/patch_check.py: hue histogram, mass, aspect) and has not jumped; the region's
+sub-pixel centroid is reported.
 
-Acquiring (the first frames, and whenever the check fails): the whole frame. Every candidate
-region is followed by its own CamShift window (a tracklet); once the patch has been seen,
-only regions that look like it are candidates. A tracklet is taken as the patch when it
-moves (the patch moves with the arm: a same-hue cup on the table never does), or when it
-appears close to where and soon after the patch was lost (it came back at rest). Because
-detect runs offline, the frames of that tracklet are then reported too. Until then frames
-are ``ok = 0`` with no position. If nothing ever moves, the largest region of the first
-frame is the patch.
+Acquiring (the first frames, and whenever the check fails): the whole frame (its mask guided
+by a half-resolution pass). Every region is followed by its own CamShift window (a
+tracklet), each frame marked by whether it looks like the patch. A tracklet that looks like
+the patch now is taken as the patch when it moves (the patch moves with the arm: a same-hue
+cup on the table never does), or when it appears close to where and soon after the patch was
+lost (it came back at rest). Because detect runs offline, its earlier frames that looked like
+the patch are then reported too. Until then frames are ``ok = 0`` with no position. If
+nothing ever moves, the largest region of the first frame is the patch.
 """
 
 from __future__ import annotations
