@@ -8,7 +8,8 @@ the patch only if what it holds looks like the patch did:
   histogram over its first accepted frames);
 - its mass (pixels of the patch's colour) is within a band around the running median of the
   accepted masses, and its aspect (long over short side of CamShift's box) is within a factor
-  of their running median and below an absolute limit.
+  of their running median and below an absolute limit;
+- it lies whole inside the image (a region cut by the edge is not all of anything).
 
 What is checked and reported is the region under the window's centre, so a neighbour reaching
 into the window does not move the reported centre (the region's sub-pixel centroid; CamShift
@@ -39,6 +40,7 @@ class Look:
     aspect: float
     hist: np.ndarray
     centroid: tuple[float, float]
+    cut: bool  # the region reaches the edge of the image searched: part of it may be outside
 
 
 def aspect_of(rw: float, rh: float) -> float:
@@ -51,8 +53,9 @@ def look(hsv: np.ndarray, regions, k: int, window, rect) -> Look:
     x, y, w, h = (int(v) for v in regions.stats[k, :4])
     hist = hue_distribution(hsv[y:y + h, x:x + w], regions.mask_of(k))
     c = regions.centroids[k]
+    H, W = hsv.shape[:2]
     return Look(float(regions.stats[k, cv2.CC_STAT_AREA]), aspect_of(*rect[1]), hist,
-                (float(c[0]), float(c[1])))
+                (float(c[0]), float(c[1])), x == 0 or y == 0 or x + w >= W or y + h >= H)
 
 
 class Reference:
@@ -82,6 +85,8 @@ class Reference:
         ``lost_s`` seconds without the patch, its size may have changed by 2^(lost_s /
         DOUBLING_S): the mass and aspect bands widen by that much."""
         slack = 2.0 ** (lost_s / DOUBLING_S)
+        if seen.cut:  # its centroid is not the patch's centre, if it is the patch at all
+            return "cut"
         if seen.aspect > s.max_aspect:
             return "aspect"
         if self.masses:

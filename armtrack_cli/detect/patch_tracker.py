@@ -194,13 +194,7 @@ class PatchTracker:
             return False
         regions = Regions(mask)
         k = regions.label_at(cx, cy)
-        rx, ry, rw, rh = (int(v) for v in regions.stats[k, :4])
-        H, W = bgr.shape[:2]
-        # a region at the search region's edge (not the image's) may go on beyond it
-        if (rx == 0 and x0 > 0) or (ry == 0 and y0 > 0) or (rx + rw >= x1 - x0 and x1 < W) or (
-                ry + rh >= y1 - y0 and y1 < H):
-            return False
-        seen = look(hsv, regions, k, win, rect)
+        seen = look(hsv, regions, k, win, rect)  # cut: at the search region's edge
         u, v = seen.centroid[0] + x0, seen.centroid[1] + y0
         if np.hypot(u - self.last[0], v - self.last[1]) > self.s.max_jump_px or \
                 self.ref.failure(seen, self.s):
@@ -243,7 +237,7 @@ class PatchTracker:
         compact one)."""
         seen = look(hsv, regions, k, window, rect)
         if self.ref.hist is None:
-            return seen.aspect <= self.s.max_aspect, seen
+            return seen.aspect <= self.s.max_aspect and not seen.cut, seen
         return not self.ref.failure(seen, self.s, self._lost_s), seen
 
     def _follow(self, i: int, hsv, bp, regions) -> dict[int, Tracklet]:
@@ -289,8 +283,9 @@ class PatchTracker:
 
     def _is_patch(self, t: Tracklet) -> bool:
         """It looks like the patch now, and it moves, or it appeared close to where and soon
-        after the patch was lost. A region already there when the patch was lost is something
-        else unless it is where the patch was heading (within RELINK_SAME_PX)."""
+        after the patch was lost. A region that already looked like the patch when the patch
+        was lost is something else unless it is where the patch was heading (within
+        RELINK_SAME_PX); one that did not may be the patch, partly hidden then."""
         if not t.good[-1]:
             return False
         if t.moves(self.s.move_px):
@@ -298,7 +293,8 @@ class PatchTracker:
         u, v, last = self.last
         if last < 0 or (t.frames[0] - last) / self.fps > self.s.relink_s:
             return False
-        near = self.s.relink_px if t.frames[0] > self._episode else RELINK_SAME_PX
+        there = t.frames[0] == self._episode and t.good[0]  # looked like it as the patch went
+        near = RELINK_SAME_PX if there else self.s.relink_px
         return np.hypot(t.rects[0][0] - u - self.vel[0], t.rects[0][1] - v - self.vel[1]) <= near
 
     def _adopt(self, t: Tracklet) -> None:
