@@ -30,9 +30,9 @@ from armtrack_cli.pipeline.kinematics import (
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, require
 from armtrack_cli.session.depth import depth_path, read_depth_frame
+from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.palm_io import read_palm_blobs, read_palm_toml
-from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.recipe import section
 from armtrack_cli.session.tables import read_kinematics, read_trajectory
