@@ -14,12 +14,14 @@ import pandas as pd
 
 from armtrack_cli.compare import palm as cmp
 from armtrack_cli.compare.errors import truth_at
+from armtrack_cli.compare.score import Truth, lowpassed
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.wrist import ANGLES
 from armtrack_cli.core.wrist_measures import angular_speeds
 from armtrack_cli.fuse.palm_init import depth_at, initial_pose
 from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig
 from armtrack_cli.fuse.palm_run import marker_area, track, trajectory_table
+from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.kinematics import (
     kinematics_table,
     measure_comparison,
@@ -132,8 +134,9 @@ def _marker_truth(session: Session, t: np.ndarray, start_t: float
     t_q = _overlapping(session, qtm.t, t)
     truth = cmp.truth_pose(t, t_q, xyz, qtm.rate_hz, session.palm.markers, session.meta.side,
                            start_t=start_t)
-    return truth, {m: truth_at(t, t_q, xyz[:, k], qtm.rate_hz)
-                   for k, m in enumerate(session.palm.markers)}
+    smooth = lowpassed(Truth(t_q, {m: xyz[:, k] for k, m in enumerate(session.palm.markers)},
+                             qtm.rate_hz), DEFAULT.lowpass_hz)  # as labs do, pipeline/compare
+    return truth, {m: truth_at(t, t_q, x, qtm.rate_hz) for m, x in smooth.xyz.items()}
 
 
 def _body_truth(session: Session, t: np.ndarray, start_t: float) -> cmp.TruthPose:
