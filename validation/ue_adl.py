@@ -49,9 +49,10 @@ def trial_rom(folder: Path, trial: str, static=None) -> dict[str, float]:
                            peer["Finger Velocity"].to_numpy())
 
 
-def joint_rotations(folder: Path, trial: str, static, arm=ArmMarkers()):
+def joint_rotations(folder: Path, trial: str, static, arm: ArmMarkers | None = None):
     """(R_hf (K, 3, 3) of the ISB frames, each carried by its own cluster, over the authors'
     window; the authors' elbow flexion (K,)), finite frames only."""
+    arm = arm or ArmMarkers()
     tr = read_markers(folder / f"ADL001{trial}.csv")
     peer = pd.read_csv(folder / f"ADL001{trial}angles.csv")
     speed = np.linalg.norm(np.gradient(lowpass(tr.marker(arm.fingertip), tr.rate_hz), axis=0),
