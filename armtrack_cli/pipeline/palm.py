@@ -139,17 +139,22 @@ def _marker_truth(session: Session, t: np.ndarray, start_t: float
     return truth, {m: truth_at(t, t_q, x, qtm.rate_hz) for m, x in smooth.xyz.items()}
 
 
-def _body_truth(session: Session, t: np.ndarray, start_t: float) -> cmp.TruthPose:
+def _body_truth(session: Session, t: np.ndarray, start_t: float
+                ) -> tuple[cmp.TruthPose, np.ndarray]:
     """The truth from the QTM 6DOF hand body [groundtruth] hand names: its origin is the WRIST
-    (or the body [groundtruth] markers.WRIST names), its rotation R_WH (axes those of H)."""
+    (or the body [groundtruth] markers.WRIST names), its rotation R_WH (axes those of H); and
+    the WRIST for the measures, low-passed at its own rate as labs do (pipeline/compare)."""
     gt = session.groundtruth
     body = read_markers(gt.file)
     R_WH = body_rotation_W(body, gt.hand, gt.to_world, session.toml_path)
     origin = gt.markers.get("WRIST", gt.hand)
     col = select_markers(body, {"WRIST": origin}, session.toml_path)["WRIST"]
     t_q = _overlapping(session, body.t, t)
-    return cmp.truth_pose_6dof(t, t_q, to_world(body.xyz[:, col], gt.to_world), R_WH,
-                               body.rate_hz, session.meta.side, start_t=start_t)
+    wrist = to_world(body.xyz[:, col], gt.to_world)
+    smooth = lowpassed(Truth(t_q, {"WRIST": wrist}, body.rate_hz), DEFAULT.lowpass_hz)
+    return (cmp.truth_pose_6dof(t, t_q, wrist, R_WH, body.rate_hz, session.meta.side,
+                                start_t=start_t),
+            truth_at(t, t_q, smooth.xyz["WRIST"], body.rate_hz))
 
 
 def _overlapping(session: Session, t_stream: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -174,8 +179,8 @@ def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict
     start_t = float(t[np.isfinite(traj["wrist_x"].to_numpy())][0])
     est = trajectory_inputs(traj, session)
     if session.groundtruth.hand is not None:
-        truth = _body_truth(session, t, start_t)
-        tin = truth_pose_inputs(est, truth.wrist, truth.angles_deg)
+        truth, wrist = _body_truth(session, t, start_t)
+        tin = truth_pose_inputs(est, wrist, truth.angles_deg)
     else:
         truth, markers = _marker_truth(session, t, start_t)
         tin = truth_inputs(est, session, markers)
