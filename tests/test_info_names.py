@@ -78,6 +78,7 @@ def test_a_landmark_only_in_the_static_trial_needs_its_cluster(tmp_path):
     assert r.exit_code == 1
     problems = json.loads(r.stdout)["groundtruth"]["problems"]
     assert len(problems) == 1 and "'RMEP'" in problems[0]
+    assert json.loads(r.stdout)["methods"]["compare"].startswith("needs the 1 name(s)")
     assert "it is in the static trial: name its cluster in [groundtruth] clusters" in problems[0]
 
 

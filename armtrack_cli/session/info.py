@@ -169,6 +169,10 @@ def describe(session: Session, *, imu_rate_hz: float | None = None,
     lacks = {"imu": "an IMU with " + " and ".join(out["imu"]["missing_for_fusion"])} \
         if "imu" in out and "imu" not in have else {}
     out["methods"] = readiness(session, have, lacks)
+    missing = len(out.get("groundtruth", {}).get("problems", []))
+    if missing:
+        out["methods"]["compare"] = (f"needs the {missing} name(s) [groundtruth] gives that the "
+                                     "files lack (listed above)")
     return out
 
 
