@@ -1,7 +1,7 @@
 """`armtrack simulate --moving-distractor --clutter` then `armtrack detect` (issue 14): the
 other arm, in a sleeve of the patch's hue, sweeps over and near the patch; frames reported
 ``ok = 1`` are on the patch (within 3 px of the simulator's true wrist pixel), and without the
-appearance check CamShift's window is carried off by the sleeve."""
+appearance check frames off the patch are reported (docs/validation-detect.md has the study)."""
 
 from __future__ import annotations
 
@@ -52,12 +52,17 @@ def test_ok_means_the_patch(session):
     assert (ok & vis).sum() >= 0.9 * vis.sum()  # and the patch is still found when in view
 
 
-def test_camshift_alone_follows_the_sleeve(session, tmp_path):
+def test_without_the_check_frames_off_the_patch_are_reported(session, tmp_path):
+    """The same session with the appearance check off (hue, mass and aspect bands wide open):
+    frames off the patch by more than 3 px, or on the sleeve over it, are reported ok = 1;
+    with the check (test above) none are."""
     folder, truth = session
     r = run_cli("detect", folder, "--out", tmp_path, *[a for s in NO_CHECK for a in ("--set", s)])
     assert r.exit_code == 0, r.stderr
     ok, err = _scored(tmp_path / "detections.csv", truth)
-    assert (ok & (err > 20)).sum() >= 20  # frames reported far from the patch
+    assert (ok & ((err > 3.0) | (truth["frame_patch_covered"] > 0.5))).sum() >= 3
+    ok, err = _scored(folder / "armtrack" / "detections.csv", truth)
+    assert not (ok & ((err > 3.0) | (truth["frame_patch_covered"] > 0.5))).any()
 
 
 def test_covered_share_is_what_the_frames_show(session):
