@@ -162,17 +162,16 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
     rc, rk = s.pixel_sigma**2, s.constraint_sigma_m**2
-    it = 0
-    for it in range(1, s.smoother_iterations + 1):
+    iterations, step = 0, np.inf
+    while iterations < s.smoother_iterations and step >= STEP_TOL_M:
         Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm, arm.shoulder)
         Xn, P, gated = smooth(m0, Pm0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk,
                               float(s.gate_chi2))
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
-        X = Xn
-        if step < STEP_TOL_M:
-            break
+        X, iterations = Xn, iterations + 1
     u = forearm(q_hat, X[:, TH], arm)
     J = np.zeros((X.shape[0], 3, X.shape[1]))  # ∂E/∂x, E = p − L2 u(δθ) (eq. 2)
     J[:, :, P_] = np.eye(3)
     J[:, :, TH] = -arm.L2 * imu_fold.skew(u)
-    return Smoothed(X, P, corrected(q_hat, X[:, TH]), J @ P @ np.swapaxes(J, 1, 2), gated, it)
+    return Smoothed(X, P, corrected(q_hat, X[:, TH]), J @ P @ np.swapaxes(J, 1, 2), gated,
+                    iterations)

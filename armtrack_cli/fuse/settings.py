@@ -71,6 +71,9 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",
                               did_you_mean(value, valid, what="choices"))
+    if s.smoother_iterations < 1:
+        raise ConfigError(where, f"[fuse] smoother_iterations = {s.smoother_iterations} is too "
+                          "few", "use 1 or more")
     if s.particles < 10:
         raise ConfigError(where, f"[fuse] particles = {s.particles} is too few", "use 10 or more")
     return s
