@@ -50,6 +50,12 @@ class Smoothed:
     iterations: int
 
 
+def orientation_var(s: FuseSettings) -> np.ndarray:
+    """(3, 3) stationary covariance of δθ: tilt (about W's x and y) and heading (about z)."""
+    return np.diag(np.deg2rad([s.orientation_sd_deg, s.orientation_sd_deg,
+                               s.heading_sd_deg]) ** 2)
+
+
 def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
             imu_period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """F (n, d, d), b (n, d), Q (n, d, d) of the augmented state's steps (index 0 unused)."""
@@ -68,7 +74,7 @@ def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
     Q[:, V_, V_] = q * dt * eye
     phi = np.exp(-dt / s.orientation_tau_s)  # Gauss–Markov: Var stays orientation_sd²
     F[:, TH, TH] = phi * eye
-    Q[:, TH, TH] = np.deg2rad(s.orientation_sd_deg) ** 2 * (1 - phi**2) * eye
+    Q[:, TH, TH] = orientation_var(s) * (1 - phi**2)
     Q[:, BA, BA] = s.accel_bias_walk**2 * dt * eye
     if shoulder is not None:
         phs = np.exp(-dt / s.shoulder_tau_s)
@@ -138,7 +144,7 @@ def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
     d = 12 if shoulder is None else 15
     m, P = np.zeros(d), np.zeros((d, d))
     m[:6], P[:6, :6] = x0, P0
-    P[TH, TH] = np.deg2rad(s.orientation_sd_deg) ** 2 * np.eye(3)
+    P[TH, TH] = orientation_var(s)
     P[BA, BA] = s.accel_bias_sd**2 * np.eye(3)
     if shoulder is not None:
         m[SH], P[SH, SH] = shoulder, s.shoulder_sd_m**2 * np.eye(3)

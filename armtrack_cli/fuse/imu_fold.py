@@ -50,9 +50,9 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 
 def _segments(t_imu: np.ndarray, t_frames: np.ndarray, hold: str):
-    """Every piece [s0, s1) between consecutive IMU-sample and frame times, as pairs
-    (frame k, sample i, weight on ∫ a dt, weight on ∫ a (t_k − t) dt) for each sample the
-    piece's acceleration depends on."""
+    """Every piece [s0, s1) between consecutive IMU-sample and frame times, in time order:
+    its frame k, and for the two samples (j, j1) its acceleration depends on, the weights on
+    ∫ a dt (wv, wv1) and on ∫ a (t_k − t) dt (wp, wp1)."""
     brk = np.union1d(t_imu, t_frames)
     brk = brk[(brk >= t_frames[0]) & (brk <= t_frames[-1])]
     s0, s1 = brk[:-1], brk[1:]
@@ -62,7 +62,7 @@ def _segments(t_imu: np.ndarray, t_frames: np.ndarray, hold: str):
     tau, D = s1 - s0, t_frames[k] - s0
     wv, wp = tau, (D**2 - (D - tau) ** 2) / 2  # ∫ dt and ∫ (t_k − t) dt over the piece
     if hold == "sample":
-        return k, j, wv, wp
+        return k, (j, j), (wv, 0 * wv), (wp, 0 * wp)
     # first-order hold: a(t) = a(s0) + (a(s1) − a(s0)) (t − s0)/τ on the piece, so
     # ∫ a dt = τ (a(s0) + a(s1))/2 and ∫ a (t_k − t) dt = a(s0) (wp − c) + a(s1) c with
     # c = ∫₀^τ u (D − u) du / τ = D τ/2 − τ²/3; a(s) interpolates samples j and j + 1
@@ -75,7 +75,7 @@ def _segments(t_imu: np.ndarray, t_frames: np.ndarray, hold: str):
     cp0, cp1 = wp - c, c
     on_j = ((1 - lam0) * cv0 + (1 - lam1) * cv1, (1 - lam0) * cp0 + (1 - lam1) * cp1)
     on_j1 = (lam0 * cv0 + lam1 * cv1, lam0 * cp0 + lam1 * cp1)
-    return (np.r_[k, k], np.r_[j, j1], np.r_[on_j[0], on_j1[0]], np.r_[on_j[1], on_j1[1]])
+    return k, (j, j1), (on_j[0], on_j1[0]), (on_j[1], on_j1[1])
 
 
 def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndarray, *,
@@ -86,13 +86,14 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
         raise ValueError(f"unknown hold {hold!r}; holds are {', '.join(HOLDS)}")
     R = quat.to_matrix(q_WB)  # (M, 3, 3) R̂_WB
     s = np.einsum("mij,mj->mi", R, f_B)  # specific force in W
-    k, i, wv, wp = _segments(t_imu, t_frames, hold)
+    k, (j, j1), (wv, wv1), (wp, wp1) = _segments(t_imu, t_frames, hold)
     n = t_frames.size
     per_sample = np.concatenate([(s + GRAVITY_W)[:, :, None], skew(s), R], axis=2)  # (M, 3, 7)
-    acc_v = np.zeros((n, 3, 7))
-    acc_p = np.zeros((n, 3, 7))
-    np.add.at(acc_v, k, wv[:, None, None] * per_sample[i])
-    np.add.at(acc_p, k, wp[:, None, None] * per_sample[i])
+    acc_v, acc_p = np.zeros((n, 3, 7)), np.zeros((n, 3, 7))
+    first = np.flatnonzero(np.r_[True, np.diff(k) > 0])  # pieces are in time order: k sorted
+    for acc, w0, w1 in ((acc_v, wv, wv1), (acc_p, wp, wp1)):
+        piece = w0[:, None, None] * per_sample[j] + w1[:, None, None] * per_sample[j1]
+        acc[k[first]] = np.add.reduceat(piece, first, axis=0)
     dt = np.r_[0.0, np.diff(t_frames)]
     return Folded(dt, acc_p[:, :, 0], acc_v[:, :, 0], acc_p[:, :, 1:4], acc_v[:, :, 1:4],
                   acc_p[:, :, 4:7], acc_v[:, :, 4:7])

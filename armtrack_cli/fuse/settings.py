@@ -41,6 +41,7 @@ class FuseSettings:
     #                                    once its orientation error and bias are estimated
     orientation_sd_deg: float = 2.5  # per axis, the IMU orientation error's SD: wider than an
     #                                MTw's ~1° (0.6° per axis), measured best (docs/fusion.md)
+    heading_sd_deg: float = 2.5  # … and about the vertical (heading), seen only by the arm
     orientation_tau_s: float = 2.0  # its correlation time (first-order Gauss–Markov)
     accel_bias_sd: float = 0.05  # m/s² per axis, prior of the accelerometer bias
     accel_bias_walk: float = 0.001  # m/s²/√s, its random walk
