@@ -172,17 +172,18 @@ def test_linearised_rows_match_finite_differences(drifting):
 
 
 def test_process_is_gauss_markov_with_the_stated_spread():
-    """δθ's stationary SD is orientation_sd_deg whatever the frame interval; the shoulder's
-    likewise, about the declared shoulder."""
-    s = FuseSettings(orientation_sd_deg=0.8, orientation_tau_s=1.5, shoulder_sd_m=0.02)
+    """δθ's stationary SD is orientation_sd_deg (tilt) and heading_sd_deg (about z) whatever
+    the frame interval; the shoulder's likewise, about the declared shoulder."""
+    s = FuseSettings(orientation_sd_deg=0.8, heading_sd_deg=1.2, orientation_tau_s=1.5,
+                     shoulder_sd_m=0.02)
     t, q, f = _imu(np.random.default_rng(6))
     fd = imu_fold.fold(t, q, f, np.arange(0.1, 2.9, 1 / 30))
     S0 = np.array([0.1, 0.2, 0.3])
     F, b, Q = arm_smoother.process(fd, s, S0, 0.01)
-    sd2 = np.deg2rad(0.8) ** 2
+    var = np.diag(np.deg2rad([0.8, 0.8, 1.2]) ** 2)
     k = 5
-    assert np.allclose(F[k, 6:9, 6:9] @ (sd2 * np.eye(3)) @ F[k, 6:9, 6:9].T + Q[k, 6:9, 6:9],
-                       sd2 * np.eye(3), rtol=1e-12)
+    assert np.allclose(F[k, 6:9, 6:9] @ var @ F[k, 6:9, 6:9].T + Q[k, 6:9, 6:9], var,
+                       rtol=1e-12, atol=0)
     assert np.allclose(F[k, 12:15, 12:15] @ S0 + b[k, 12:15], S0, rtol=1e-12)
     assert np.allclose(F[k, 12:15, 12:15] @ (4e-4 * np.eye(3)) @ F[k, 12:15, 12:15].T
                        + Q[k, 12:15, 12:15], 4e-4 * np.eye(3), rtol=1e-12)
