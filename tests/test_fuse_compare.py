@@ -70,8 +70,11 @@ def test_the_default_arm_smoother_meets_issue_14s_goals(sessions, name, rmse_cm,
 
 def test_arm_smoother_recovers_the_imus_errors(sessions):
     """The simulator's accelerometer bias (constant, body frame) and its orientation error
-    (truth: the output orientation against the true one) are estimated: the bias within
-    0.01 m/s² per axis; the corrected orientation has less than half the raw one's error."""
+    (truth: the output orientation against the true one) are estimated: the corrected
+    orientation has less than half the raw one's error; the bias within 0.01 m/s² along the
+    IMU's z (near vertical here, told from tilt by gravity) and within 0.025 m/s² across it,
+    where a bias and a tilt error of the same horizontal acceleration (b ≈ g·δθ) are told
+    apart only by the changes of orientation, small in a circle on the table."""
     from armtrack_cli.fuse.methods import run
     from armtrack_cli.pipeline.fuse import prepare, settings_for
     from armtrack_cli.session.config import load_session
@@ -82,7 +85,8 @@ def test_arm_smoother_recovers_the_imus_errors(sessions):
     x0 = np.r_[truth["frame_wrist"][p.frames[0]], 0, 0, 0]
     P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
     est = run("arm-smoother", p.inputs, x0, P0, p.projection, s, p.arm)
-    assert np.abs(np.array(est.summary["accel_bias_m_s2"]) - truth["acc_bias"]).max() < 0.01
+    err = np.abs(np.array(est.summary["accel_bias_m_s2"]) - truth["acc_bias"])
+    assert err[2] < 0.01 and err[:2].max() < 0.025, err
     from armtrack_cli.core import quaternion as Q
 
     q_true = truth["frame_q_WB"][p.frames]
