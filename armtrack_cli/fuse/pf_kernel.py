@@ -23,9 +23,11 @@ from armtrack_cli.filters.sfc64 import random as uniform
 
 RESAMPLING = {"residual": 0, "systematic": 1, "stratified": 2, "multinomial": 3}
 SUMS = {"reassoc"}  # sums over particles may be reordered (vectorised): round-off only
+# error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
+# whose check keeps LLVM from vectorising any loop that divides
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _search_sorted_keys(cdf, u, idx, start):
     """idx[start + j] = min(#{cdf ≤ u_j}, N − 1) for sorted u: searchsorted(side="right")
     by one merge walk."""
@@ -36,7 +38,7 @@ def _search_sorted_keys(cdf, u, idx, start):
         idx[start + j] = min(i, n - 1)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _sorted_uniforms(s, k, work, start):
     """np.sort(rng.random(k)) into work[0, :k], by bucket sort, O(k) for uniforms: the same
     array, faster. work (3, N) floats (rows: u, sorted, cdf), start (N + 1,) int."""
@@ -61,7 +63,7 @@ def _sorted_uniforms(s, k, work, start):
     return u
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _resample(w, s, scheme, idx, work, start):
     """Ancestor indices into idx (N,), as filters/resampling.py, drawing the same uniforms;
     work (3, N) and start (N + 1,) as _sorted_uniforms takes them."""
@@ -108,7 +110,7 @@ def _resample(w, s, scheme, idx, work, start):
     _search_sorted_keys(cdf, u, idx, 0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _take(xs, idx, out):
     """out = xs[:, idx] (the resampled particles, (6, N))."""
     for j in range(6):
@@ -116,23 +118,67 @@ def _take(xs, idx, out):
             out[j, i] = xs[j, idx[i]]
 
 
-@njit(cache=True)
-def _normalise(lw, w):
-    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form); uniform if every lw = −inf."""
-    m = lw.max()
-    n = lw.size
-    if not np.isfinite(m):
-        w[:] = 1.0 / n
-        return
+# exp(x) for x ≤ 0 in SIMD: x = n ln2 + r, |r| ≤ ln2 / 2 (Cody & Waite's two-part ln2), e^r by
+# its Taylor series to r¹³ (truncation < 5e-18), 2^n from a table; within 1 ulp of np.exp
+# (tests/test_fuse_filters.py), where libm's exp, one call per particle, is 3× slower.
+_LN2_HI, _LN2_LO, _LOG2E = 6.93147180369123816490e-01, 1.90821492927058770002e-10, 1 / np.log(2)
+_EXP_C = 1.0 / np.cumprod(np.r_[1.0, np.arange(1.0, 14.0)])  # 1 / j!, j = 0 … 13
+_POW2 = 2.0 ** -np.arange(1076.0)  # 2^-n, n = 0 … 1075 (2^-1075 rounds to 0)
+
+
+@njit(cache=True, error_model="numpy")
+def exp_nonpositive(x, m, out):
+    """out = exp(x − m) for x (n,) ≤ m (NaN stays NaN; below −745, where exp is 0, 0); out
+    must not be x (the loop is vectorised only for distinct arrays)."""
+    for i in range(x.size):
+        v = x[i] - m
+        v = max(v, -745.0) if v == v else v
+        n = np.rint(v * _LOG2E)
+        r = (v - n * _LN2_HI) - n * _LN2_LO
+        p = _EXP_C[13]
+        for j in range(12, -1, -1):
+            p = p * r + _EXP_C[j]
+        out[i] = p * _POW2[np.intp(-n)] if v == v else v
+
+
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _total(w):
     s = 0.0
-    for i in range(n):
-        w[i] = np.exp(lw[i] - m)
-        s += w[i]
-    for i in range(n):
-        w[i] /= s
+    for v in w:
+        s += v
+    return s
 
 
-@njit(cache=True, fastmath=SUMS)
+@njit(cache=True, error_model="numpy")
+def _max(lw):
+    """max(lw) by four running maxima (no chain of dependent compares); a NaN in lw either
+    makes it NaN or is caught by the sum in _normalise."""
+    m0 = m1 = m2 = m3 = -np.inf
+    n = lw.size
+    for i in range(0, n - 3, 4):
+        m0, m1, m2, m3 = max(m0, lw[i]), max(m1, lw[i + 1]), max(m2, lw[i + 2]), max(m3, lw[i + 3])
+    for i in range(n - n % 4, n):
+        m0 = max(m0, lw[i])
+    return max(max(m0, m1), max(m2, m3))
+
+
+@njit(cache=True, error_model="numpy")
+def _normalise(lw, w):
+    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form); uniform if every lw = −inf, or
+    if one is NaN (as the reference, whose max is then NaN)."""
+    m = _max(lw)
+    n = lw.size
+    if np.isfinite(m):
+        exp_nonpositive(lw, m, w)
+        s = _total(w)
+        if np.isfinite(s):
+            for i in range(n):
+                w[i] /= s
+            return
+    w[:] = 1.0 / n
+
+
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _moments(xs, w, mean, cov, d):
     """Weighted mean Σ w_i x_i (6,) and covariance Σ w_i d_i d_iᵀ (6, 6), d_i = x_i − mean,
     into mean, cov (as particles.moments; plain loops, so one core and no BLAS threads);
@@ -153,10 +199,11 @@ def _moments(xs, w, mean, cov, d):
             cov[a, b] = cov[b, a] = c
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _pixel(p0, p1, p2, cam, dist):
     """π(p): OpenCV's pinhole with k1 k2 p1 p2 k3 (models.Projection) at one point in W;
-    cam = (R (3, 3) row-major, T, fx, fy, cx, cy) flattened (16,)."""
+    cam = (R (3, 3) row-major, T, fx, fy, cx, cy) flattened (16,), dist (5,): arrays, or
+    tuples (held in registers through a loop over particles)."""
     k1, k2, t1, t2, k3 = dist[0], dist[1], dist[2], dist[3], dist[4]
     X = cam[0] * p0 + cam[1] * p1 + cam[2] * p2 + cam[9]
     Y = cam[3] * p0 + cam[4] * p1 + cam[5] * p2 + cam[10]
@@ -172,7 +219,7 @@ def _pixel(p0, p1, p2, cam, dist):
     return dx * cam[12] + cam[14], dy * cam[13] + cam[15]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uniform, lw):
     """Step 1, x_k ~ N(F x + b, Q) (eq. 10) with Q = L Lᵀ ⊗ I₃ from eps rows 0-5; step 2,
     lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11) if z is seen. Returns whether it is."""
@@ -187,15 +234,33 @@ def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uni
                 xs[3 + j, i] = v + dvj + c * eps[j, i] + e * eps[3 + j, i]
     if not (np.isfinite(z[0]) and np.isfinite(z[1])):
         return False
-    log_w0 = np.log(w[0])  # a uniform prior: one log for all
+    ct, dt5, z0, z1 = _camera_tuple(cam), _dist_tuple(dist), z[0], z[1]  # in registers
     for i in range(n):
-        u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], cam, dist)
-        eu, ev = u - z[0], v - z[1]
-        lw[i] = -inv2s2 * (eu * eu + ev * ev) + (log_w0 if uniform else np.log(w[i]))
+        u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
+        eu, ev = u - z0, v - z1
+        lw[i] = -inv2s2 * (eu * eu + ev * ev)
+    if uniform:  # a uniform prior: one log for all
+        log_w0 = np.log(w[0])
+        for i in range(n):
+            lw[i] += log_w0
+    else:
+        for i in range(n):
+            lw[i] += np.log(w[i])
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def _camera_tuple(c):
+    return (c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11], c[12],
+            c[13], c[14], c[15])
+
+
+@njit(cache=True, error_model="numpy")
+def _dist_tuple(d):
+    return d[0], d[1], d[2], d[3], d[4]
+
+
+@njit(cache=True, error_model="numpy")
 def _walk_and_constrain(xs, eps, walk, centre, L1, inv2c2, lw):
     """Step 4, the random-walk layer p² (eqs. 17, 18) from eps rows 6-11; step 5,
     lw_i = −r_i² / 2σ² with r_i = |p_i − centre| − L1 (eq. 15 on the upper-arm length, see
@@ -210,7 +275,7 @@ def _walk_and_constrain(xs, eps, walk, centre, L1, inv2c2, lw):
         lw[i] = -inv2c2 * r * r
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
         constrained, scheme, resample_ess):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
@@ -255,7 +320,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     return mean, cov, n_eff
 
 
-@njit(cache=True, fastmath=SUMS)
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _sum_sq(w):
     s = 0.0
     for v in w:
