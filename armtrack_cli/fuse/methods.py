@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armtrack_cli.filters import gaussian, sfc64
+from armtrack_cli.filters import gaussian
 from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
 from armtrack_cli.fuse.models import Arm, Projection, Steps
@@ -112,6 +112,8 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
     reference, to round-off (tests/test_pf_kernel.py)."""
+    from armtrack_cli.filters import sfc64  # numba's: imported only when a particle filter runs
+
     rng = sfc64.generator(s.seed)  # numpy's SFC64, which the kernel draws from inline
     N = s.particles
     x = rng.multivariate_normal(x0, P0, size=N)
@@ -161,6 +163,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
 def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
                             constrained: bool) -> Estimates:
+    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import pf_kernel
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
@@ -184,6 +187,7 @@ def load_kernels(method: str) -> None:
     that a caller timing ``run`` times the filter only."""
     if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint"):
         return
+    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
     z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
