@@ -70,15 +70,16 @@ def _resample(w, s, scheme, idx, work, start):
     n = w.size
     cdf = work[2]
     if scheme == 0:  # residual: floor(N w_i) copies, then R leftovers (Liu & Chen 1998)
-        total = w.sum()
+        total, nw = _total(w), work[1]
+        for i in range(n):  # N w_i and its fractional part (SIMD)
+            nw[i] = n * (w[i] / total)
+            cdf[i] = nw[i] - np.floor(nw[i])
         m, acc = 0, 0.0
         for i in range(n):
-            nw = n * (w[i] / total)
-            c = np.int64(nw)
-            for _ in range(c):
+            for _ in range(np.int64(nw[i])):
                 idx[m] = i
                 m += 1
-            acc += nw - np.floor(nw)
+            acc += cdf[i]
             cdf[i] = acc
         k = n - m
         if k == 0:
