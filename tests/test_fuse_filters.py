@@ -116,6 +116,17 @@ def test_steps_stacked_are_the_per_frame_steps():
         np.testing.assert_array_equal(Q[k], inp.steps.Q(k))
 
 
+def test_smoothing_one_block_of_steps_at_a_time_is_smoothing_with_them_all():
+    """rts_smooth fed F, b, Q a block at a time (Steps.stacked(lo, hi), as smooth() does to
+    keep memory flat) gives what it gives with the whole arrays."""
+    inp, x0, P0, FbQ = _problem(n_frames=60)
+    x, P = _textbook(inp, x0, P0, FbQ, 16.0 * np.eye(2))
+    whole = gaussian.rts_smooth(x, P, *inp.steps.stacked(), block=7)
+    blocks = gaussian.rts_smooth(x, P, steps=inp.steps.stacked, block=7)
+    for u, v in zip(whole, blocks):
+        np.testing.assert_array_equal(u, v)
+
+
 def test_run_particles_matches_the_kalman_filter():
     """Bootstrap PF (numpy reference), 80,000 particles, resampled every frame: its mean is
     within 0.3 of the KF's standard deviation of the KF mean, its spread within 15 %. (The

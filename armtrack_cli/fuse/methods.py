@@ -224,9 +224,12 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimat
     (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
     through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
     to the process noise of each step."""
-    F, b, Q = inp.steps.stacked()
-    if method == "pf-constraint":
-        Q = Q + np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2)
-    Q += 1e-12 * np.eye(6)
-    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), F, b, Q)
+    walk = np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2) \
+        if method == "pf-constraint" else 0.0
+
+    def steps(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        F, b, Q = inp.steps.stacked(lo, hi)  # a block at a time: memory flat with the length
+        return F, b, Q + walk + 1e-12 * np.eye(6)
+
+    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), steps=steps)
     return Estimates(x, P, est.ess)
