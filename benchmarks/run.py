@@ -77,7 +77,7 @@ def prepared(tmp: str):
     out = Path(tmp) / "fuse"
     pipeline.calibrate(folder, out=out)
     pipeline.detect(folder, out=out)
-    s, _ = settings_for(None, (), method="pf-constraint", seed=0)
+    s, _ = settings_for(None, (), seed=0)  # the default method
     prep = prepare(load_session(folder), out, s)
     inp, proj, arm = prep.inputs, prep.projection, prep.arm
     x0 = np.zeros(6)
@@ -160,8 +160,10 @@ def stage(code: str) -> tuple[float, float, str]:
 def end_to_end(tmp: str, minutes: float) -> list[tuple]:
     """A session through every stage with the default method, each stage in its own process
     so its peak memory is its own; and decoding its video once, the reference."""
-    folder = str(Path(tmp) / f"long-{minutes:g}")
-    stage(f"pipeline.simulate({folder!r}, ArmSimSettings(duration_s={minutes * 60}))")
+    keep = os.environ.get("BENCH_SESSIONS")  # a folder where the long sessions are kept
+    folder = str(Path(keep or tmp) / f"long-{minutes:g}")
+    if not (keep and (Path(folder) / "video.mp4").exists()):  # simulating is slow: reuse
+        stage(f"pipeline.simulate({folder!r}, ArmSimSettings(duration_s={minutes * 60}))")
     video = str(Path(folder) / "video.mp4")
     rows = [("decode the video once (reference)",
              *stage(f"sum(1 for _ in iter_frames(probe_video({video!r})))"))]
@@ -174,6 +176,7 @@ def main() -> None:
     import tempfile
 
     from filters import gaussian_vs_filterpy, pf_vs_reference, resampling_vs_filterpy, smoother_rows
+    from pf_profile import passes
 
     minutes = [float(m) for m in os.environ.get("BENCH_MINUTES", "10,60").split(",")]
     res = {}
@@ -181,6 +184,8 @@ def main() -> None:
         res["detect"] = detection_rows(tmp)
         folder, out, s, inp, proj, arm, x0, P0 = prepared(tmp)
         res["pf"] = pf_vs_reference(inp, proj, arm, x0, P0, s)
+        res["pf_passes"] = passes()
+        res["method"] = s.method
         res["gauss"] = gaussian_vs_filterpy(inp, proj, x0, P0, s)
         res["smoother"] = smoother_rows()
         res["resampling"] = resampling_vs_filterpy()
