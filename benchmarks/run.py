@@ -179,6 +179,7 @@ def main() -> None:
     from pf_profile import passes
 
     minutes = [float(m) for m in os.environ.get("BENCH_MINUTES", "10,60").split(",")]
+    load0 = os.getloadavg()[1]
     res = {}
     with tempfile.TemporaryDirectory() as tmp:
         res["detect"] = detection_rows(tmp)
@@ -195,7 +196,8 @@ def main() -> None:
     libs = ", ".join(f"{p} {version(p)}" for p in ("numpy", "scipy", "numba",
                                                    "opencv-python-headless", "filterpy"))
     res["machine"] = (f"{cpu()}, {os.cpu_count()} logical CPUs, Python "
-                      f"{platform.python_version()}; {libs}")
+                      f"{platform.python_version()}; {libs}; load average (5 min) "
+                      f"{load0:.1f} at the start, {os.getloadavg()[1]:.1f} at the end")
     res["paper"] = PAPER_S_PER_FRAME
     text = write_report(res, REPO / "docs" / "benchmarks.md")
     print(text)
