@@ -61,7 +61,7 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
     rng = np.random.default_rng(0)
     xs = np.ascontiguousarray(np.c_[rng.normal(0.3, 0.01, (n, 3)),
                                     rng.normal(0.0, 0.05, (n, 3))].T)
-    s = sfc64.load(sfc64.generator(0))
+    s = sfc64.get_state(sfc64.generator(0))
     eps = np.empty((12, n))
     K.fill_normals(s, eps.T)
     cam = np.r_[1.0, 0, 0, 0, -1, 0, 0, 0, -1, -0.3, 0.2, 1.6, 600, 610, 320, 240]

@@ -4,9 +4,9 @@ draws exactly what ``np.random.Generator(np.random.SFC64(seed))`` draws: the num
 of a kernel consumes the same numbers from numpy itself (tests/test_sfc64.py checks the
 streams bit for bit).
 
-The state is a uint64 array (a, b, c, counter), as numpy's ``bit_generator.state``; ``load``
-and ``store`` move it between the two. SFC64: Doty-Humphrey's "small fast chaotic" generator
-(PractRand). Normals: numpy's 256-layer ziggurat (Marsaglia & Tsang 2000, 52-bit variant of
+The state is a uint64 array (a, b, c, counter), as numpy's ``bit_generator.state``;
+``get_state`` and ``set_state`` move it between the two. SFC64: Doty-Humphrey's "small fast
+chaotic" generator (PractRand). Normals: numpy's 256-layer ziggurat (Marsaglia & Tsang 2000, 52-bit variant of
 numpy's distributions.c), with numpy's own tables as numba ships them.
 """
 
@@ -29,7 +29,7 @@ def generator(seed: int) -> np.random.Generator:
     return np.random.Generator(np.random.SFC64(seed))
 
 
-def load(rng: np.random.Generator) -> np.ndarray:
+def get_state(rng: np.random.Generator) -> np.ndarray:
     """The state of an SFC64 ``rng`` as (a, b, c, counter) uint64 (4,)."""
     st = rng.bit_generator.state
     if st["bit_generator"] != "SFC64":
@@ -37,7 +37,7 @@ def load(rng: np.random.Generator) -> np.ndarray:
     return np.array(st["state"]["state"], np.uint64)
 
 
-def store(rng: np.random.Generator, state: np.ndarray) -> None:
+def set_state(rng: np.random.Generator, state: np.ndarray) -> None:
     """Advance ``rng`` to ``state`` (what a kernel drew is then drawn)."""
     st = rng.bit_generator.state
     st["state"] = {"state": np.array(state, np.uint64)}

@@ -171,13 +171,13 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator
     cam, dist = _camera_arrays(proj)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
-    state = sfc64.load(rng)
+    state = sfc64.get_state(rng)
     mean, cov, n_eff = pf_kernel.run(
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
         float(s.pf_resample_ess))
-    sfc64.store(rng, state)
+    sfc64.set_state(rng, state)
     return Estimates(mean, cov, n_eff)
 
 
@@ -198,8 +198,9 @@ def load_kernels(method: str) -> None:
         gaussian_kernel.run(x0, 1e-4 * np.eye(6), z, q, d3, d3, 0.0, cam, dist, 1.0,
                             gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0)
     else:
-        pf_kernel.run(np.zeros((10, 6)), sfc64.load(sfc64.generator(0)), z, q, d3, d3, d3, d3, cam,
-                      dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0, 1.0)
+        pf_kernel.run(np.zeros((10, 6)), sfc64.get_state(sfc64.generator(0)), z, q, d3, d3, d3,
+                      d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
+                      1.0)
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
