@@ -72,8 +72,8 @@ def write_report(res: dict, path: Path) -> str:
           "| scheme | N | armtrack (numpy) | FilterPy | × FilterPy |", "|---|---|---|---|---|"]
     for name, n, ours, theirs in res["resampling"]:
         L.append(f"| {name} | {n} | {ours:.1f} | {theirs:.1f} | {theirs / ours:.1f} |")
-    L += ["", f"## Scaling with session length (fuse's filter and smoother, default method: "
-          f"{res['method']})", "", "| minutes | frames | seconds | µs/frame |",
+    L += ["", f"## Scaling with session length (fuse's filter and smoother: {res['method']}, "
+          "the default arm-smoother's first pass)", "", "| minutes | frames | seconds | µs/frame |",
           "|---|---|---|---|"]
     for minutes, n, sec in res["scaling"]:
         L.append(f"| {minutes} | {n} | {sec:.3f} | {sec / n * 1e6:.1f} |")

@@ -77,7 +77,9 @@ def prepared(tmp: str):
     out = Path(tmp) / "fuse"
     pipeline.calibrate(folder, out=out)
     pipeline.detect(folder, out=out)
-    s, _ = settings_for(None, (), seed=0)  # the default method
+    # pf-constraint: the filters' rows and the scaling run on arrays (the default arm-smoother
+    # needs the IMU samples themselves; its first pass is this pf-constraint + RTS)
+    s, _ = settings_for(None, (), method="pf-constraint", seed=0)
     prep = prepare(load_session(folder), out, s)
     inp, proj, arm = prep.inputs, prep.projection, prep.arm
     x0 = np.zeros(6)
