@@ -5,6 +5,14 @@ looked for in a region around it. Candidate regions are connected components of 
 the marker colour; each is scored by the Bhattacharyya similarity of its hue-saturation
 histogram to the reference marker histogram. Every candidate is kept, clutter included:
 deciding which blob is which marker, or clutter, is the filter's job.
+
+Speed: after a frame with blobs, the next is searched only in a window around them (grown by
+``window_margin_px``), without the skin step. The whole frame (the hand's region by skin) is
+searched again to re-acquire: when a blob in the window touches the window's edge (it may
+extend beyond it), when the window finds fewer blobs than the frame before (one may have left
+it), and every ``full_every`` frames (new clutter far from the markers). A blob wholly inside
+the window is the same connected component, with the same centroid, area and score, as on
+the whole frame.
 """
 
 from __future__ import annotations
@@ -27,6 +35,8 @@ class PalmBlobSettings:
     hue_slack: int = 12  # candidate pixels: the marker hue range widened by this much
     sat_floor: int = 60
     min_score: float = 0.2  # 1 − Bhattacharyya distance
+    window_margin_px: int = 40  # the search window: the previous blobs' box grown by this
+    full_every: int = 15  # frames between searches of the hand's whole region (0: always)
 
 
 def skin_mask(bgr: np.ndarray) -> np.ndarray:
@@ -54,27 +64,64 @@ class PalmBlobDetector:
     def __init__(self, low, high, settings: PalmBlobSettings = PalmBlobSettings()):
         self.low, self.high, self.s = tuple(low), tuple(high), settings
         self.reference: np.ndarray | None = None
+        self._window: tuple[int, int, int, int] | None = None
+        self._last_n, self._since_full = 0, 0
+        self.full_searches = 0  # frames searched over the hand's whole region
+        lo = (max(0, self.low[0] - settings.hue_slack), settings.sat_floor, self.low[2] // 2)
+        self._cand = (lo, (min(180, self.high[0] + settings.hue_slack), 255, 255))
 
     def _candidates_mask(self, hsv: np.ndarray) -> np.ndarray:
-        lo = (max(0, self.low[0] - self.s.hue_slack), self.s.sat_floor, self.low[2] // 2)
-        hi = (min(180, self.high[0] + self.s.hue_slack), 255, 255)
-        return range_mask(hsv, lo, hi)
+        return range_mask(hsv, *self._cand)
 
     def detect(self, bgr: np.ndarray) -> np.ndarray:
         """(k, 4) candidate blobs: u, v (sub-pixel centroid), area (px), score in [0, 1]."""
+        out = None
+        if self._window is not None and self._since_full < self.s.full_every:
+            out = self._search(bgr, self._window, edge_fails=True)
+            if out is not None and len(out) < self._last_n:
+                out = None  # a blob may have left the window: search the hand's region
+        if out is None:
+            out = self._full(bgr)
+            self._since_full = 0
+            self.full_searches += 1
+        self._since_full += 1
+        self._last_n = len(out)
+        self._window = self._window_of(out, bgr.shape) if len(out) else None
+        return out
+
+    def _window_of(self, blobs: np.ndarray, shape) -> tuple[int, int, int, int]:
+        m = self.s.window_margin_px
+        x0, y0 = np.floor(blobs[:, :2].min(axis=0)).astype(int) - m
+        x1, y1 = np.ceil(blobs[:, :2].max(axis=0)).astype(int) + m + 1
+        return max(0, x0), max(0, y0), min(shape[1], x1), min(shape[0], y1)
+
+    def _full(self, bgr: np.ndarray) -> np.ndarray:
+        """The hand's region by skin colour (re-acquisition)."""
         roi = hand_roi(bgr, self.s.roi_margin)
         if roi is None:
             return np.zeros((0, 4))
-        x0, y0, x1, y1 = roi
+        return self._search(bgr, roi, edge_fails=False)
+
+    def _search(self, bgr: np.ndarray, box, *, edge_fails: bool) -> np.ndarray | None:
+        """Candidates in box (x0, y0, x1, y1); None if edge_fails and a candidate touches an
+        edge of the box that is not the image's."""
+        x0, y0, x1, y1 = box
         hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
         if self.reference is None:  # the reference: pixels of the marker colour range
             ref_mask = range_mask(hsv, self.low, self.high)
             if cv2.countNonZero(ref_mask) < self.s.min_area_px:
                 return np.zeros((0, 4))
             self.reference = hs_histogram(hsv, ref_mask)
-        cand = self._candidates_mask(hsv)
-        regions = Regions(cand)
+        regions = Regions(self._candidates_mask(hsv))
         n, stats = regions.n, regions.stats
+        if edge_fails and n > 1:
+            H, W = bgr.shape[:2]
+            st = stats[1:]
+            touch = (((st[:, 0] == 0) & (x0 > 0)) | ((st[:, 1] == 0) & (y0 > 0))
+                     | ((st[:, 0] + st[:, 2] == x1 - x0) & (x1 < W))
+                     | ((st[:, 1] + st[:, 3] == y1 - y0) & (y1 < H)))
+            if touch.any():
+                return None
         rows = []
         for k in range(1, n):
             area = int(stats[k, cv2.CC_STAT_AREA])

@@ -38,7 +38,8 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
                 on_frame(i + 1)
         table = pd.DataFrame(rows, columns=["frame", "t", "blob", "u", "v", "area", "score"])
         summary = {"blobs": len(rows), "frames_with_6_or_more": int(
-            (table.groupby("frame").size() >= 6).sum()) if rows else 0}
+            (table.groupby("frame").size() >= 6).sum()) if rows else 0,
+                   "frames_searched_whole": det.full_searches}
     else:
         if session.camera.patch is None:
             raise ConfigError(session.toml_path, "[camera] patch is missing, which detect needs",
