@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from armtrack_cli.detect.colour import hs_histogram, range_mask
+from armtrack_cli.detect.colour import HS_BINS, HS_RANGES, hs_histogram, range_mask
 from armtrack_cli.detect.regions import Regions
 
 SKIN_YCRCB = ((0, 135, 80), (255, 175, 130))  # Cr 135-175, Cb 80-130 (Chai & Ngan style bounds)
@@ -35,7 +35,7 @@ class PalmBlobSettings:
     hue_slack: int = 12  # candidate pixels: the marker hue range widened by this much
     sat_floor: int = 60
     min_score: float = 0.2  # 1 − Bhattacharyya distance
-    window_margin_px: int = 40  # the search window: the previous blobs' box grown by this
+    window_margin_px: int = 24  # the search window: the previous blobs' box grown by this
     full_every: int = 15  # frames between searches of the hand's whole region (0: always)
 
 
@@ -93,46 +93,55 @@ class PalmBlobDetector:
         m = self.s.window_margin_px
         x0, y0 = np.floor(blobs[:, :2].min(axis=0)).astype(int) - m
         x1, y1 = np.ceil(blobs[:, :2].max(axis=0)).astype(int) + m + 1
-        return max(0, x0), max(0, y0), min(shape[1], x1), min(shape[0], y1)
+        return max(0, x0) & ~1, max(0, y0) & ~1, min(shape[1], x1), min(shape[0], y1)
 
     def _full(self, bgr: np.ndarray) -> np.ndarray:
         """The hand's region by skin colour (re-acquisition)."""
         roi = hand_roi(bgr, self.s.roi_margin)
         if roi is None:
             return np.zeros((0, 4))
-        return self._search(bgr, roi, edge_fails=False)
+        return self._search(bgr, (roi[0] & ~1, roi[1] & ~1, roi[2], roi[3]), edge_fails=False)
 
     def _search(self, bgr: np.ndarray, box, *, edge_fails: bool) -> np.ndarray | None:
-        """Candidates in box (x0, y0, x1, y1); None if edge_fails and a candidate touches an
-        edge of the box that is not the image's."""
+        """Candidates in box (x0, y0, x1, y1), x0 and y0 even (OpenCV labels 2 × 2 blocks: on
+        the same grid as the whole image, so the same order); None if edge_fails and a
+        candidate touches an edge of the box that is not the image's."""
         x0, y0, x1, y1 = box
         hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
         if self.reference is None:  # the reference: pixels of the marker colour range
             ref_mask = range_mask(hsv, self.low, self.high)
             if cv2.countNonZero(ref_mask) < self.s.min_area_px:
                 return np.zeros((0, 4))
-            self.reference = hs_histogram(hsv, ref_mask)
-        regions = Regions(self._candidates_mask(hsv))
-        n, stats = regions.n, regions.stats
+            self.reference = hs_histogram(hsv, ref_mask).astype(np.float64).ravel()
+        n, labels, stats, cent = cv2.connectedComponentsWithStats(
+            self._candidates_mask(hsv), connectivity=8)
+        st = stats[1:]
         if edge_fails and n > 1:
             H, W = bgr.shape[:2]
-            st = stats[1:]
             touch = (((st[:, 0] == 0) & (x0 > 0)) | ((st[:, 1] == 0) & (y0 > 0))
                      | ((st[:, 0] + st[:, 2] == x1 - x0) & (x1 < W))
                      | ((st[:, 1] + st[:, 3] == y1 - y0) & (y1 < H)))
             if touch.any():
                 return None
-        rows = []
-        for k in range(1, n):
-            area = int(stats[k, cv2.CC_STAT_AREA])
-            if area < self.s.min_area_px:
-                continue
-            x, y, w, h = (int(v) for v in stats[k, :4])
-            sub = regions.mask_of(k)
-            hist = hs_histogram(hsv[y:y + h, x:x + w], sub * 255)
-            score = 1.0 - cv2.compareHist(self.reference, hist, cv2.HISTCMP_BHATTACHARYYA)
-            if score < self.s.min_score:
-                continue
-            m = cv2.moments(sub, binaryImage=True)
-            rows.append((x0 + x + m["m10"] / m["m00"], y0 + y + m["m01"] / m["m00"], area, score))
-        return np.array(rows, float).reshape(-1, 4)
+        keep = np.flatnonzero(st[:, cv2.CC_STAT_AREA] >= self.s.min_area_px)
+        if keep.size == 0:
+            return np.zeros((0, 4))
+        score = 1.0 - self._bhattacharyya(hsv, labels, n)[keep + 1]
+        good = score >= self.s.min_score
+        k = keep[good] + 1
+        return np.c_[x0 + cent[k, 0], y0 + cent[k, 1], stats[k, cv2.CC_STAT_AREA], score[good]]
+
+    def _bhattacharyya(self, hsv: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+        """(n,) OpenCV's HISTCMP_BHATTACHARYYA, √(1 − Σ √(a b) / √(Σa Σb)), between the
+        reference and each region's hue-saturation histogram (colour.HS_BINS over
+        colour.HS_RANGES: H // 6, S // 8), all regions' histograms in one bincount."""
+        lab = labels.ravel()
+        p = np.flatnonzero(lab)
+        hs = hsv.reshape(-1, 3)[p]
+        nb = HS_BINS[0] * HS_BINS[1]
+        bins = (hs[:, 0] // (HS_RANGES[1] // HS_BINS[0])).astype(np.int64) * HS_BINS[1] + \
+            hs[:, 1] // (HS_RANGES[3] // HS_BINS[1])
+        h = np.bincount(lab[p].astype(np.int64) * nb + bins, minlength=n * nb).reshape(n, nb)
+        ref = self.reference
+        s = np.sqrt(h * ref).sum(axis=1) / np.sqrt(np.maximum(h.sum(axis=1), 1) * ref.sum())
+        return np.sqrt(np.maximum(1.0 - s, 0.0))
