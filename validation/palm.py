@@ -31,7 +31,7 @@ from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.compare.palm import association_score  # noqa: E402
 from armtrack_cli.simulate.palm_session import PalmSimSettings  # noqa: E402
 
-TASKS = ("wrist-rom", "reach-grasp")
+TASKS = ("wrist-rom", "reach-grasp", "wrist-deviation", "wrist-flexion")
 CONFIGS = {"defaults": None, "cordella-ukf-palm": "cordella-ukf-palm"}
 HIDE_START, HIDE_S, CLUTTER2_S = 4.0, 1.2, 6.0
 GOALS = "angle RMSE ≤ 2°, WRIST RMSE ≤ 5 mm, RoM within 2°, association ≥ 99 %"
