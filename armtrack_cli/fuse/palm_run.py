@@ -17,6 +17,7 @@ from armtrack_cli.filters import manifold_ukf as mu
 from armtrack_cli.filters.gaussian import SigmaPoints
 from armtrack_cli.fuse.association import associate
 from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig, facing, measure, noise_cov, process
+from armtrack_cli.fuse.palm_reacquire import reacquire
 
 STATE_DIM = 12  # error state: φ (3), T (3), v (3), ω (3)
 NOISE_DIM = 6  # augmented noise: a (3), α (3)
@@ -36,22 +37,15 @@ class PalmTrack:
     marker_of_blob: list
 
 
-LOST_SD = np.r_[[np.radians(15.0)] * 3, [0.02] * 3, [0.05] * 3, [0.5] * 3]
-
-
-def lost(st: mu.ManifoldState) -> mu.ManifoldState:
-    """No marker for longer than max_coast_s: hold the last pose at rest with a bounded
-    spread (15°, 2 cm) instead of letting the covariance grow past what the sigma points can
-    represent, so the markers can be picked up again when they return."""
-    x = st.x.copy()
-    x[3:] = 0.0
-    return mu.ManifoldState(st.R, x, np.diag(LOST_SD**2))
-
-
-def initial_state(s: PalmUkfSettings) -> mu.ManifoldState:
-    """W0 is H at the start: R = I, T = 0, at rest; P0 from the initialisation's spread."""
+def initial_state(s: PalmUkfSettings, R: np.ndarray | None = None,
+                  T: np.ndarray | None = None) -> mu.ManifoldState:
+    """W0 is H at the start: R = I, T = 0, at rest; P0 from the initialisation's spread. After
+    a re-acquisition: the fitted R, T, at rest, the same spread."""
     sd = np.r_[[np.deg2rad(s.init_sigma_deg)] * 3, [s.init_sigma_m] * 3, [0.02] * 3, [0.2] * 3]
-    return mu.ManifoldState(np.eye(3), np.zeros(9), np.diag(sd**2))
+    x = np.zeros(9)
+    if T is not None:
+        x[:3] = T
+    return mu.ManifoldState(np.eye(3) if R is None else R, x, np.diag(sd**2))
 
 
 def marker_area(blobs: np.ndarray, pixels: np.ndarray) -> float:
@@ -147,16 +141,26 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
     rr, cc = two + np.array([0, 1])[:, None], two + np.array([0, 1])[None, :]  # 2×2 blocks
     for k in range(start, K):
         dt = t[k] - t[k - 1] if k > start else 1e-3  # from the frame times, not 0.03 s
-        if t[k] - last > s.max_coast_s:
-            st = lost(st)
-        pr, zm, Pzz, Pxz = steps.prior(st, dt)
-        S = Pzz[rr, cc]  # (M, 2, 2): P_yy,j of each marker
         single = blobs[k][:, 2] <= s.merged_area * area_px
         y = blobs[k][single]
+        if t[k] - last > s.max_coast_s:  # lost: only the palm model can pick the hand up
+            got = reacquire(y, rig, sigma_px=s.pixel_sigma, sigma_z=s.depth_sigma_m)
+            coast[k] = t[k] - last
+            if got is None:
+                continue  # the row stays empty
+            st, last = initial_state(s, got[0], got[1]), t[k]
+            mob[k][single] = got[2]
+            out_R[k], out_x[k], out_P[k], used[k], coast[k] = st.R, st.x, st.P, M, 0.0
+            continue
+        pr, zm, Pzz, Pxz = steps.prior(st, dt)
+        S = Pzz[rr, cc]  # (M, 2, 2): P_yy,j of each marker
         m_of_b, b_of_m = steps.associate(y[:, :2], zm[:2 * M].reshape(M, 2), S,
                                          facing(rig, pr.R, pr.x[:3]))  # eq. 6-12
-        mob[k][single] = m_of_b
         j = np.flatnonzero(b_of_m >= 0)
+        if k > start and last < t[k - 1] and j.size < s.resume_min_markers:  # a pose needs 3
+            m_of_b[:] = -1
+            j = j[:0]
+        mob[k][single] = m_of_b
         if j.size:
             b = y[b_of_m[j]]
             rows, z = (2 * j[:, None] + np.array([0, 1])).ravel(), b[:, :2].ravel()
