@@ -52,7 +52,8 @@ def test_scores_are_opencvs_bhattacharyya_of_each_region():
     det.detect(img)
     hsv = cv2.cvtColor(img, cv2.COLOR_BGR2HSV)
     n, labels, _, _ = cv2.connectedComponentsWithStats(det._candidates_mask(hsv), connectivity=8)
-    ours = det._bhattacharyya(hsv, labels, n)
+    lab = labels.ravel()
+    ours = det._bhattacharyya(hsv, lab, np.flatnonzero(lab), n)
     ref = det.reference.astype(np.float32).reshape(30, 32)
     for k in range(1, n):
         h = hs_histogram(hsv, (labels == k).astype(np.uint8) * 255)

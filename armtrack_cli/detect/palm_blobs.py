@@ -126,17 +126,36 @@ class PalmBlobDetector:
         keep = np.flatnonzero(st[:, cv2.CC_STAT_AREA] >= self.s.min_area_px)
         if keep.size == 0:
             return np.zeros((0, 4))
-        score = 1.0 - self._bhattacharyya(hsv, labels, n)[keep + 1]
-        good = score >= self.s.min_score
-        k = keep[good] + 1
-        return np.c_[x0 + cent[k, 0], y0 + cent[k, 1], stats[k, cv2.CC_STAT_AREA], score[good]]
-
-    def _bhattacharyya(self, hsv: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
-        """(n,) OpenCV's HISTCMP_BHATTACHARYYA, √(1 − Σ √(a b) / √(Σa Σb)), between the
-        reference and each region's hue-saturation histogram (colour.HS_BINS over
-        colour.HS_RANGES: H // 6, S // 8), all regions' histograms in one bincount."""
         lab = labels.ravel()
         p = np.flatnonzero(lab)
+        score = 1.0 - self._bhattacharyya(hsv, lab, p, n)[keep + 1]
+        good = score >= self.s.min_score
+        k = keep[good] + 1
+        u, v = self._core_centroids(hsv, lab, p, n, cent)
+        return np.c_[x0 + u[k], y0 + v[k], stats[k, cv2.CC_STAT_AREA], score[good]]
+
+    def _core_centroids(self, hsv, lab, p, n, cent) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) centroid of each region's pixels in the marker's own colour range (the region
+        itself was grown by hue_slack and sat_floor to catch the marker whole; those rim
+        pixels are the marker blended with what lies next to it, and a bluish sleeve beside
+        the WRIST marker pulled its centroid by 0.75 px: docs/palm-ukf.md). A region without
+        such pixels keeps its whole centroid."""
+        core = range_mask(hsv, self.low, self.high).ravel()[p] > 0
+        w = hsv.shape[1]
+        L = lab[p][core]
+        cnt = np.bincount(L, minlength=n)
+        su = np.bincount(L, weights=(p[core] % w).astype(float), minlength=n)
+        sv = np.bincount(L, weights=(p[core] // w).astype(float), minlength=n)
+        has = cnt > 0
+        c = np.maximum(cnt, 1)
+        return np.where(has, su / c, cent[:, 0]), np.where(has, sv / c, cent[:, 1])
+
+    def _bhattacharyya(self, hsv: np.ndarray, lab: np.ndarray, p: np.ndarray,
+                       n: int) -> np.ndarray:
+        """(n,) OpenCV's HISTCMP_BHATTACHARYYA, √(1 − Σ √(a b) / √(Σa Σb)), between the
+        reference and each region's hue-saturation histogram (colour.HS_BINS over
+        colour.HS_RANGES: H // 6, S // 8), all regions' histograms in one bincount; lab the
+        flat labels, p the indices of the labelled pixels."""
         hs = hsv.reshape(-1, 3)[p]
         nb = HS_BINS[0] * HS_BINS[1]
         bins = (hs[:, 0] // (HS_RANGES[1] // HS_BINS[0])).astype(np.int64) * HS_BINS[1] + \
