@@ -59,3 +59,23 @@ def test_scores_are_opencvs_bhattacharyya_of_each_region():
         h = hs_histogram(hsv, (labels == k).astype(np.uint8) * 255)
         assert abs(ours[k] - cv2.compareHist(ref, h, cv2.HISTCMP_BHATTACHARYYA)) < 1e-6
     assert n > 6
+
+
+def test_core_centroid_takes_the_wrist_blob_nearer_its_marker():
+    """centroid = "core" (docs/palm-ukf.md): the WRIST blob's mean offset from the true
+    projection, pulled towards the bluish sleeve by the rim pixels, shrinks."""
+    s = load_session(SAMPLE)
+    truth = dict(np.load(SAMPLE.parent / "wrist-rom-01.truth.npz"))
+    lo, hi = s.palm.colour.low, s.palm.colour.high
+    dets = {c: PalmBlobDetector(lo, hi, PalmBlobSettings(centroid=c)) for c in ("region", "core")}
+    off = {c: [] for c in dets}
+    for i, _, img in iter_frames(probe_video(s.camera.video)):
+        if i % 4:
+            continue
+        p = truth["frame_marker_px"][i, 0]
+        for c, d in dets.items():
+            b = d.detect(img)
+            j = np.argmin(np.linalg.norm(b[:, :2] - p, axis=1))
+            off[c].append(b[j, :2] - p)
+    region, core = (np.linalg.norm(np.mean(off[c], axis=0)) for c in ("region", "core"))
+    assert region > 0.5 and core < 0.6 * region, (region, core)

@@ -25,6 +25,7 @@ import numpy as np
 from armtrack_cli.detect.colour import HS_BINS, HS_RANGES, hs_histogram, range_mask
 from armtrack_cli.detect.regions import Regions
 
+CENTROIDS = ("region", "core")  # PalmBlobSettings.centroid
 SKIN_YCRCB = ((0, 135, 80), (255, 175, 130))  # Cr 135-175, Cb 80-130 (Chai & Ngan style bounds)
 
 
@@ -37,6 +38,8 @@ class PalmBlobSettings:
     min_score: float = 0.2  # 1 − Bhattacharyya distance
     window_margin_px: int = 24  # the search window: the previous blobs' box grown by this
     full_every: int = 15  # frames between searches of the hand's whole region (0: always)
+    centroid: str = "region"  # "core": from the region's pixels in the marker's own colour
+    #                           range (docs/palm-ukf.md: less WRIST bias, but see there)
 
 
 def skin_mask(bgr: np.ndarray) -> np.ndarray:
@@ -62,6 +65,7 @@ def hand_roi(bgr: np.ndarray, margin: float) -> tuple[int, int, int, int] | None
 
 class PalmBlobDetector:
     def __init__(self, low, high, settings: PalmBlobSettings = PalmBlobSettings()):
+        assert settings.centroid in CENTROIDS, settings.centroid
         self.low, self.high, self.s = tuple(low), tuple(high), settings
         self.reference: np.ndarray | None = None
         self._window: tuple[int, int, int, int] | None = None
@@ -131,7 +135,8 @@ class PalmBlobDetector:
         score = 1.0 - self._bhattacharyya(hsv, lab, p, n)[keep + 1]
         good = score >= self.s.min_score
         k = keep[good] + 1
-        u, v = self._core_centroids(hsv, lab, p, n, cent)
+        u, v = (self._core_centroids(hsv, lab, p, n, cent) if self.s.centroid == "core"
+                else (cent[:, 0], cent[:, 1]))
         return np.c_[x0 + u[k], y0 + v[k], stats[k, cv2.CC_STAT_AREA], score[good]]
 
     def _core_centroids(self, hsv, lab, p, n, cent) -> tuple[np.ndarray, np.ndarray]:

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from armtrack_cli.core.errors import ConfigError
-from armtrack_cli.detect.palm_blobs import PalmBlobDetector, PalmBlobSettings
+from armtrack_cli.detect.palm_blobs import CENTROIDS, PalmBlobDetector, PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings, PatchTracker
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.session.config import load_session, require
@@ -29,6 +29,9 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
     start = time.perf_counter()
     if session.palm is not None:
         settings = section(doc, "detect.palm", PalmBlobSettings, where)
+        if settings.centroid not in CENTROIDS:
+            raise ConfigError(where, f"[detect.palm] centroid = {settings.centroid!r} is not "
+                              "one of " + ", ".join(CENTROIDS))
         det = PalmBlobDetector(session.palm.colour.low, session.palm.colour.high, settings)
         rows = []
         for i, t, img in iter_frames_ahead(video):
