@@ -31,7 +31,7 @@ from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.compare.palm import association_score  # noqa: E402
 from armtrack_cli.simulate.palm_session import PalmSimSettings  # noqa: E402
 
-TASKS = ("wrist-rom", "reach-grasp")
+TASKS = ("wrist-rom", "reach-grasp", "wrist-deviation", "wrist-flexion")
 CONFIGS = {"defaults": None, "cordella-ukf-palm": "cordella-ukf-palm"}
 HIDE_START, HIDE_S, CLUTTER2_S = 4.0, 1.2, 6.0
 GOALS = "angle RMSE ≤ 2°, WRIST RMSE ≤ 5 mm, RoM within 2°, association ≥ 99 %"
@@ -108,6 +108,27 @@ def table(rows: list[dict]) -> list[str]:
     return out
 
 
+def summary(results: dict) -> list[str]:
+    """The must-show lines of issue 11, the worst session of each configuration."""
+    out = ["## Summary (the worst session of each configuration)", "",
+           "| configuration | angle RMSE ° (max) | WRIST RMSE mm (max) | deviation RoM err °, "
+           "wrist-deviation (max abs) | flexion RoM err °, wrist-flexion (max abs) | "
+           "RoM err °, all angles and sessions (max abs) | assoc. % (min) | clutter used | "
+           "max err occl. ° |", "|---|---|---|---|---|---|---|---|---|"]
+    for c, rows in results.items():
+        ang = max(r[f"{k}_rmse_deg"] for r in rows for k in ("flexion", "deviation", "pronation"))
+        dev = [abs(r["deviation_rom_err_deg"]) for r in rows if "deviation" in r["session"]]
+        flex = [abs(r["flexion_rom_err_deg"]) for r in rows if "flexion" in r["session"]]
+        rom = max(abs(r[f"{k}_rom_err_deg"]) for r in rows
+                  for k in ("flexion", "deviation", "pronation"))
+        out.append(f"| {c} | {ang:.2f} | {max(r['wrist_rmse_mm'] for r in rows):.2f} | "
+                   f"{max(dev, default=np.nan):.2f} | {max(flex, default=np.nan):.2f} | {rom:.2f} | "
+                   f"{min(r['assoc_pct'] for r in rows):.2f} | "
+                   f"{sum(r['clutter_used'] for r in rows)} | "
+                   f"{max(r['max_err_occlusion_deg'] for r in rows):.2f} |")
+    return out + [""]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=3)
@@ -154,6 +175,7 @@ def main() -> None:
              "blobs left unused, clutter blobs used; the largest angle error during the hidden "
              "span and the second after it, and during the neutral first 1.5 s; filter speed "
              "(frames/s on this machine, the filter loop alone).", ""]
+    lines += summary(results)
     for c, rows in results.items():
         lines += [f"## {c}" + (" (armtrack's defaults: depth updates)" if c == "defaults" else
                                " (the paper's filter: projections only after eq. 13-20)"), ""]

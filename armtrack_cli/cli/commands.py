@@ -19,6 +19,7 @@ from armtrack_cli.cli.params import Finite, parse_hide, parse_pixels
 from armtrack_cli.core.errors import ArmtrackError, DescribedError
 from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
+from armtrack_cli.simulate.hand import HAND_TASKS
 
 # Heavy libraries (OpenCV, SciPy, pandas, matplotlib) are imported by the pipeline, which each
 # command imports when it runs: `armtrack --help` and a shell script's calls start at once.
@@ -278,11 +279,12 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 
 @main.command()
 @click.argument("out", type=click.Path(file_okay=False))
-@click.option("--task", type=click.Choice(["circle", "rectangle", "reach", "figure8", "wrist-rom",
-                                           "reach-grasp"]),
+@click.option("--task", type=click.Choice(["circle", "rectangle", "reach", "figure8",
+                                           *HAND_TASKS]),
               default="circle", show_default=True,
-              help="Task: the first four are arm sessions (IMU + patch), wrist-rom and reach-grasp "
-              "palm-marker sessions with depth.")
+              help="Task: the first four are arm sessions (IMU + patch), the others "
+              "palm-marker sessions with depth (wrist-deviation: ±25° radial/ulnar deviation, "
+              "wrist-flexion: ±45° flexion-extension, each twice).")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Random seed (same seed, same bytes).")
 @click.option("--duration", type=Finite(min=4.0, max=3600.0), default=20.0,
@@ -349,7 +351,7 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
 
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
-    if task in ("wrist-rom", "reach-grasp"):
+    if task in HAND_TASKS:
         settings = pipeline.PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
                                    qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
                                    distortion=not no_distortion, calib_images=calib_images,

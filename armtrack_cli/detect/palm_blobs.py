@@ -5,6 +5,14 @@ looked for in a region around it. Candidate regions are connected components of 
 the marker colour; each is scored by the Bhattacharyya similarity of its hue-saturation
 histogram to the reference marker histogram. Every candidate is kept, clutter included:
 deciding which blob is which marker, or clutter, is the filter's job.
+
+Speed: after a frame with blobs, the next is searched only in a window around them (grown by
+``window_margin_px``), without the skin step. The whole frame (the hand's region by skin) is
+searched again to re-acquire: when a blob in the window touches the window's edge (it may
+extend beyond it), when the window finds fewer blobs than the frame before (one may have left
+it), and every ``full_every`` frames (new clutter far from the markers). A blob wholly inside
+the window is the same connected component, with the same centroid, area and score, as on
+the whole frame.
 """
 
 from __future__ import annotations
@@ -14,9 +22,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from armtrack_cli.detect.colour import hs_histogram, range_mask
+from armtrack_cli.detect.colour import HS_BINS, HS_RANGES, hs_histogram, range_mask
 from armtrack_cli.detect.regions import Regions
 
+CENTROIDS = ("region", "core")  # PalmBlobSettings.centroid
 SKIN_YCRCB = ((0, 135, 80), (255, 175, 130))  # Cr 135-175, Cb 80-130 (Chai & Ngan style bounds)
 
 
@@ -27,6 +36,10 @@ class PalmBlobSettings:
     hue_slack: int = 12  # candidate pixels: the marker hue range widened by this much
     sat_floor: int = 60
     min_score: float = 0.2  # 1 − Bhattacharyya distance
+    window_margin_px: int = 24  # the search window: the previous blobs' box grown by this
+    full_every: int = 15  # frames between searches of the hand's whole region (0: always)
+    centroid: str = "region"  # "core": from the region's pixels in the marker's own colour
+    #                           range (docs/palm-ukf.md: less WRIST bias, but see there)
 
 
 def skin_mask(bgr: np.ndarray) -> np.ndarray:
@@ -52,40 +65,107 @@ def hand_roi(bgr: np.ndarray, margin: float) -> tuple[int, int, int, int] | None
 
 class PalmBlobDetector:
     def __init__(self, low, high, settings: PalmBlobSettings = PalmBlobSettings()):
+        assert settings.centroid in CENTROIDS, settings.centroid
         self.low, self.high, self.s = tuple(low), tuple(high), settings
         self.reference: np.ndarray | None = None
+        self._window: tuple[int, int, int, int] | None = None
+        self._last_n, self._since_full = 0, 0
+        self.full_searches = 0  # frames searched over the hand's whole region
+        lo = (max(0, self.low[0] - settings.hue_slack), settings.sat_floor, self.low[2] // 2)
+        self._cand = (lo, (min(180, self.high[0] + settings.hue_slack), 255, 255))
 
     def _candidates_mask(self, hsv: np.ndarray) -> np.ndarray:
-        lo = (max(0, self.low[0] - self.s.hue_slack), self.s.sat_floor, self.low[2] // 2)
-        hi = (min(180, self.high[0] + self.s.hue_slack), 255, 255)
-        return range_mask(hsv, lo, hi)
+        return range_mask(hsv, *self._cand)
 
     def detect(self, bgr: np.ndarray) -> np.ndarray:
         """(k, 4) candidate blobs: u, v (sub-pixel centroid), area (px), score in [0, 1]."""
+        out = None
+        if self._window is not None and self._since_full < self.s.full_every:
+            out = self._search(bgr, self._window, edge_fails=True)
+            if out is not None and len(out) < self._last_n:
+                out = None  # a blob may have left the window: search the hand's region
+        if out is None:
+            out = self._full(bgr)
+            self._since_full = 0
+            self.full_searches += 1
+        self._since_full += 1
+        self._last_n = len(out)
+        self._window = self._window_of(out, bgr.shape) if len(out) else None
+        return out
+
+    def _window_of(self, blobs: np.ndarray, shape) -> tuple[int, int, int, int]:
+        m = self.s.window_margin_px
+        x0, y0 = np.floor(blobs[:, :2].min(axis=0)).astype(int) - m
+        x1, y1 = np.ceil(blobs[:, :2].max(axis=0)).astype(int) + m + 1
+        return max(0, x0) & ~1, max(0, y0) & ~1, min(shape[1], x1), min(shape[0], y1)
+
+    def _full(self, bgr: np.ndarray) -> np.ndarray:
+        """The hand's region by skin colour (re-acquisition)."""
         roi = hand_roi(bgr, self.s.roi_margin)
         if roi is None:
             return np.zeros((0, 4))
-        x0, y0, x1, y1 = roi
+        return self._search(bgr, (roi[0] & ~1, roi[1] & ~1, roi[2], roi[3]), edge_fails=False)
+
+    def _search(self, bgr: np.ndarray, box, *, edge_fails: bool) -> np.ndarray | None:
+        """Candidates in box (x0, y0, x1, y1), x0 and y0 even (OpenCV labels 2 × 2 blocks: on
+        the same grid as the whole image, so the same order); None if edge_fails and a
+        candidate touches an edge of the box that is not the image's."""
+        x0, y0, x1, y1 = box
         hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
         if self.reference is None:  # the reference: pixels of the marker colour range
             ref_mask = range_mask(hsv, self.low, self.high)
             if cv2.countNonZero(ref_mask) < self.s.min_area_px:
                 return np.zeros((0, 4))
-            self.reference = hs_histogram(hsv, ref_mask)
-        cand = self._candidates_mask(hsv)
-        regions = Regions(cand)
-        n, stats = regions.n, regions.stats
-        rows = []
-        for k in range(1, n):
-            area = int(stats[k, cv2.CC_STAT_AREA])
-            if area < self.s.min_area_px:
-                continue
-            x, y, w, h = (int(v) for v in stats[k, :4])
-            sub = regions.mask_of(k)
-            hist = hs_histogram(hsv[y:y + h, x:x + w], sub * 255)
-            score = 1.0 - cv2.compareHist(self.reference, hist, cv2.HISTCMP_BHATTACHARYYA)
-            if score < self.s.min_score:
-                continue
-            m = cv2.moments(sub, binaryImage=True)
-            rows.append((x0 + x + m["m10"] / m["m00"], y0 + y + m["m01"] / m["m00"], area, score))
-        return np.array(rows, float).reshape(-1, 4)
+            self.reference = hs_histogram(hsv, ref_mask).astype(np.float64).ravel()
+        n, labels, stats, cent = cv2.connectedComponentsWithStats(
+            self._candidates_mask(hsv), connectivity=8)
+        st = stats[1:]
+        if edge_fails and n > 1:
+            H, W = bgr.shape[:2]
+            touch = (((st[:, 0] == 0) & (x0 > 0)) | ((st[:, 1] == 0) & (y0 > 0))
+                     | ((st[:, 0] + st[:, 2] == x1 - x0) & (x1 < W))
+                     | ((st[:, 1] + st[:, 3] == y1 - y0) & (y1 < H)))
+            if touch.any():
+                return None
+        keep = np.flatnonzero(st[:, cv2.CC_STAT_AREA] >= self.s.min_area_px)
+        if keep.size == 0:
+            return np.zeros((0, 4))
+        lab = labels.ravel()
+        p = np.flatnonzero(lab)
+        score = 1.0 - self._bhattacharyya(hsv, lab, p, n)[keep + 1]
+        good = score >= self.s.min_score
+        k = keep[good] + 1
+        u, v = (self._core_centroids(hsv, lab, p, n, cent) if self.s.centroid == "core"
+                else (cent[:, 0], cent[:, 1]))
+        return np.c_[x0 + u[k], y0 + v[k], stats[k, cv2.CC_STAT_AREA], score[good]]
+
+    def _core_centroids(self, hsv, lab, p, n, cent) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) centroid of each region's pixels in the marker's own colour range (the region
+        itself was grown by hue_slack and sat_floor to catch the marker whole; those rim
+        pixels are the marker blended with what lies next to it, and a bluish sleeve beside
+        the WRIST marker pulled its centroid by 0.75 px: docs/palm-ukf.md). A region without
+        such pixels keeps its whole centroid."""
+        core = range_mask(hsv, self.low, self.high).ravel()[p] > 0
+        w = hsv.shape[1]
+        L = lab[p][core]
+        cnt = np.bincount(L, minlength=n)
+        su = np.bincount(L, weights=(p[core] % w).astype(float), minlength=n)
+        sv = np.bincount(L, weights=(p[core] // w).astype(float), minlength=n)
+        has = cnt > 0
+        c = np.maximum(cnt, 1)
+        return np.where(has, su / c, cent[:, 0]), np.where(has, sv / c, cent[:, 1])
+
+    def _bhattacharyya(self, hsv: np.ndarray, lab: np.ndarray, p: np.ndarray,
+                       n: int) -> np.ndarray:
+        """(n,) OpenCV's HISTCMP_BHATTACHARYYA, √(1 − Σ √(a b) / √(Σa Σb)), between the
+        reference and each region's hue-saturation histogram (colour.HS_BINS over
+        colour.HS_RANGES: H // 6, S // 8), all regions' histograms in one bincount; lab the
+        flat labels, p the indices of the labelled pixels."""
+        hs = hsv.reshape(-1, 3)[p]
+        nb = HS_BINS[0] * HS_BINS[1]
+        bins = (hs[:, 0] // (HS_RANGES[1] // HS_BINS[0])).astype(np.int64) * HS_BINS[1] + \
+            hs[:, 1] // (HS_RANGES[3] // HS_BINS[1])
+        h = np.bincount(lab[p].astype(np.int64) * nb + bins, minlength=n * nb).reshape(n, nb)
+        ref = self.reference
+        s = np.sqrt(h * ref).sum(axis=1) / np.sqrt(np.maximum(h.sum(axis=1), 1) * ref.sum())
+        return np.sqrt(np.maximum(1.0 - s, 0.0))

@@ -29,6 +29,8 @@ class PalmUkfSettings:
     merge_px: float = 10.0  # two predicted markers closer than this may share a blob: unused
     merged_area: float = 1.7  # a blob this many times a marker's area is two merged markers
     max_coast_s: float = 1.0  # rows without markers for longer than this are left empty
+    resume_min_markers: int = 3  # after a frame without update, fewer markers are not used:
+    #                              a lone blob near a wide prediction may well be clutter
     init_sigma_deg: float = 2.0  # P0: attitude about the initial pose
     init_sigma_m: float = 0.003  # P0: WRIST position about the initial pose
     depth_sigma_m: float = 0.004  # σ_z of a marker's depth reading (eq. 13)

@@ -17,6 +17,7 @@ from armtrack_cli.filters import manifold_ukf as mu
 from armtrack_cli.filters.gaussian import SigmaPoints
 from armtrack_cli.fuse.association import associate
 from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig, facing, measure, noise_cov, process
+from armtrack_cli.fuse.palm_reacquire import reacquire
 
 STATE_DIM = 12  # error state: φ (3), T (3), v (3), ω (3)
 NOISE_DIM = 6  # augmented noise: a (3), α (3)
@@ -36,22 +37,15 @@ class PalmTrack:
     marker_of_blob: list
 
 
-LOST_SD = np.r_[[np.radians(15.0)] * 3, [0.02] * 3, [0.05] * 3, [0.5] * 3]
-
-
-def lost(st: mu.ManifoldState) -> mu.ManifoldState:
-    """No marker for longer than max_coast_s: hold the last pose at rest with a bounded
-    spread (15°, 2 cm) instead of letting the covariance grow past what the sigma points can
-    represent, so the markers can be picked up again when they return."""
-    x = st.x.copy()
-    x[3:] = 0.0
-    return mu.ManifoldState(st.R, x, np.diag(LOST_SD**2))
-
-
-def initial_state(s: PalmUkfSettings) -> mu.ManifoldState:
-    """W0 is H at the start: R = I, T = 0, at rest; P0 from the initialisation's spread."""
+def initial_state(s: PalmUkfSettings, R: np.ndarray | None = None,
+                  T: np.ndarray | None = None) -> mu.ManifoldState:
+    """W0 is H at the start: R = I, T = 0, at rest; P0 from the initialisation's spread. After
+    a re-acquisition: the fitted R, T, at rest, the same spread."""
     sd = np.r_[[np.deg2rad(s.init_sigma_deg)] * 3, [s.init_sigma_m] * 3, [0.02] * 3, [0.2] * 3]
-    return mu.ManifoldState(np.eye(3), np.zeros(9), np.diag(sd**2))
+    x = np.zeros(9)
+    if T is not None:
+        x[:3] = T
+    return mu.ManifoldState(np.eye(3) if R is None else R, x, np.diag(sd**2))
 
 
 def marker_area(blobs: np.ndarray, pixels: np.ndarray) -> float:
@@ -63,15 +57,81 @@ def marker_area(blobs: np.ndarray, pixels: np.ndarray) -> float:
     return float(np.median(blobs[np.argmin(d, axis=1), 2]))
 
 
+class _NumpySteps:
+    """The reference: filters/manifold_ukf.py with palm_models.process and measure."""
+
+    def __init__(self, rig: Rig, s: PalmUkfSettings, rvar: np.ndarray, image_area: float):
+        self.rig, self.s, self.R_meas, self.image_area = rig, s, np.diag(rvar), image_area
+        self.sp = SigmaPoints(STATE_DIM + NOISE_DIM, alpha=s.alpha, beta=s.beta, kappa=s.kappa)
+
+    def prior(self, st: mu.ManifoldState, dt: float):
+        f = lambda R, x, w: process(R, x, w, dt)  # noqa: E731  (eq. 5)
+        pr = mu.predict(st, f, noise_cov(self.s, dt), self.sp)
+        Z = measure(self.rig, pr.Rs, pr.xs)  # eq. 9: every marker, every sigma point
+        return (pr, *mu.predicted_measurement(pr, Z, self.R_meas))  # eq. 10-11
+
+    def correct(self, pr, rows, z, zm, Pzz, Pxz) -> mu.ManifoldState:
+        return mu.correct(pr, z, zm[rows], Pzz[rows[:, None], rows], Pxz[:, rows])
+
+    def associate(self, y, zm, S, usable) -> tuple[np.ndarray, np.ndarray]:
+        s = self.s
+        a = associate(y, zm, S, usable, prior_marker=s.prior_marker,
+                      prior_clutter=s.prior_clutter, image_area=self.image_area, gate=s.gate,
+                      merge_px=s.merge_px)
+        return a.marker_of_blob, a.blob_of_marker
+
+
+class _KernelSteps:
+    """The same steps compiled (fuse/palm_kernel.py), into work arrays allocated once."""
+
+    def __init__(self, rig: Rig, s: PalmUkfSettings, rvar: np.ndarray, image_area: float):
+        from armtrack_cli.fuse import palm_kernel as pk
+
+        self.pk, self.s, self.rvar, self.image_area = pk, s, rvar, image_area
+        sp = SigmaPoints(STATE_DIM + NOISE_DIM, alpha=s.alpha, beta=s.beta, kappa=s.kappa)
+        self.c, (self.Wm, self.Wc) = sp.n + sp.lam, sp.weights()
+        S, k = 2 * sp.n + 1, rvar.size
+        d = np.zeros(5)
+        d[:min(5, rig.dist.size)] = rig.dist[:5]
+        self.geo = (np.ascontiguousarray(rig.markers_H, float), rig.R_CW0.copy(),
+                    np.asarray(rig.T_CW0, float).copy(),
+                    np.array([rig.K[0, 0], rig.K[0, 1], rig.K[0, 2], rig.K[1, 1], rig.K[1, 2]]), d)
+        self.work = (np.empty((S, 3, 3)), np.empty((S, STATE_DIM - 3)), np.empty((S, STATE_DIM)),
+                     np.empty((S, k)))
+
+    def prior(self, st: mu.ManifoldState, dt: float):
+        R, x, P = np.empty((3, 3)), np.empty(9), np.empty((STATE_DIM, STATE_DIM))
+        k = self.rvar.size
+        zm, Pzz, Pxz = np.empty(k), np.empty((k, k)), np.empty((STATE_DIM, k))
+        self.pk.prior(st.R, st.x, st.P, self.s.accel_density, self.s.ang_accel_density, dt,
+                      self.c, self.Wm, self.Wc, *self.geo, self.rvar, *self.work, R, x, P, zm,
+                      Pzz, Pxz)
+        return mu.Prior(R, x, P, *self.work[:3], self.Wm, self.Wc), zm, Pzz, Pxz
+
+    def correct(self, pr, rows, z, zm, Pzz, Pxz) -> mu.ManifoldState:
+        R, x, P = np.empty((3, 3)), np.empty(9), np.empty((STATE_DIM, STATE_DIM))
+        self.pk.correct(pr.R, pr.x, pr.P, rows, z, zm, Pzz, Pxz, R, x, P)
+        return mu.ManifoldState(R, x, P)
+
+    def associate(self, y, zm, S, usable) -> tuple[np.ndarray, np.ndarray]:
+        from armtrack_cli.fuse import association_kernel as ak
+
+        s = self.s
+        mob, bom = np.empty(len(y), np.int64), np.empty(len(zm), np.int64)
+        ak.associate(np.ascontiguousarray(y), zm, S, usable, s.prior_marker, s.prior_clutter,
+                     self.image_area, s.gate, s.merge_px, mob, bom)
+        return mob, bom
+
+
 def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmUkfSettings,
-          image_area: float, area_px: float) -> PalmTrack:
+          image_area: float, area_px: float, *, compiled: bool = True) -> PalmTrack:
     """Run the filter from frame ``start`` (the initialisation frame, neutral pose) on the
     frame times t (K,) and each frame's blobs (B_k, 4): u, v (px), area (px²), depth (m, NaN
     without a reading). Blobs larger than s.merged_area × area_px (one marker's area) are
-    merged markers, never used."""
+    merged markers, never used. ``compiled``: the numba steps, else the numpy reference."""
     K, M = t.size, rig.markers_H.shape[0]
-    sp = SigmaPoints(STATE_DIM + NOISE_DIM, alpha=s.alpha, beta=s.beta, kappa=s.kappa)
-    R_meas = np.diag([s.pixel_sigma**2] * 2 * M + [s.depth_sigma_m**2] * M)
+    rvar = np.r_[np.full(2 * M, s.pixel_sigma**2), np.full(M, s.depth_sigma_m**2)]
+    steps = (_KernelSteps if compiled else _NumpySteps)(rig, s, rvar, image_area)
     out_R, out_x = np.full((K, 3, 3), np.nan), np.full((K, 9), np.nan)
     out_P = np.full((K, STATE_DIM, STATE_DIM), np.nan)
     used, coast = np.zeros(K, int), np.full(K, np.nan)
@@ -81,28 +141,34 @@ def track(t: np.ndarray, blobs: list[np.ndarray], start: int, rig: Rig, s: PalmU
     rr, cc = two + np.array([0, 1])[:, None], two + np.array([0, 1])[None, :]  # 2×2 blocks
     for k in range(start, K):
         dt = t[k] - t[k - 1] if k > start else 1e-3  # from the frame times, not 0.03 s
-        if t[k] - last > s.max_coast_s:
-            st = lost(st)
-        f = lambda R, x, w, dt=dt: process(R, x, w, dt)  # noqa: E731  (eq. 5)
-        pr = mu.predict(st, f, noise_cov(s, dt), sp)
-        Z = measure(rig, pr.Rs, pr.xs)  # eq. 9: every marker, every sigma point
-        zm, Pzz, Pxz = mu.predicted_measurement(pr, Z, R_meas)  # eq. 10-11
-        S = Pzz[rr, cc]  # (M, 2, 2): P_yy,j of each marker
         single = blobs[k][:, 2] <= s.merged_area * area_px
         y = blobs[k][single]
-        a = associate(y[:, :2], zm[:2 * M].reshape(M, 2), S, facing(rig, pr.R, pr.x[:3]),
-                      prior_marker=s.prior_marker, prior_clutter=s.prior_clutter,
-                      image_area=image_area, gate=s.gate, merge_px=s.merge_px)
-        mob[k][single] = a.marker_of_blob
-        j = np.flatnonzero(a.blob_of_marker >= 0)
+        if t[k] - last > s.max_coast_s:  # lost: only the palm model can pick the hand up
+            got = reacquire(y, rig, sigma_px=s.pixel_sigma, sigma_z=s.depth_sigma_m)
+            coast[k] = t[k] - last
+            if got is None:
+                continue  # the row stays empty
+            st, last = initial_state(s, got[0], got[1]), t[k]
+            mob[k][single] = got[2]
+            out_R[k], out_x[k], out_P[k], used[k], coast[k] = st.R, st.x, st.P, M, 0.0
+            continue
+        pr, zm, Pzz, Pxz = steps.prior(st, dt)
+        S = Pzz[rr, cc]  # (M, 2, 2): P_yy,j of each marker
+        m_of_b, b_of_m = steps.associate(y[:, :2], zm[:2 * M].reshape(M, 2), S,
+                                         facing(rig, pr.R, pr.x[:3]))  # eq. 6-12
+        j = np.flatnonzero(b_of_m >= 0)
+        if k > start and last < t[k - 1] and j.size < s.resume_min_markers:  # a pose needs 3
+            m_of_b[:] = -1
+            j = j[:0]
+        mob[k][single] = m_of_b
         if j.size:
-            b = y[a.blob_of_marker[j]]
+            b = y[b_of_m[j]]
             rows, z = (2 * j[:, None] + np.array([0, 1])).ravel(), b[:, :2].ravel()
             if s.depth_updates:
                 zr = 2 * M + j
                 ok = np.isfinite(b[:, 3]) & ((b[:, 3] - zm[zr]) ** 2 <= s.gate * Pzz[zr, zr])
                 rows, z = np.concatenate([rows, zr[ok]]), np.concatenate([z, b[ok, 3]])
-            st = mu.correct(pr, z, zm[rows], Pzz[rows[:, None], rows], Pxz[:, rows])
+            st = steps.correct(pr, rows, z, zm, Pzz, Pxz)
             last = t[k]
         else:
             st = mu.no_update(pr)

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from armtrack_cli.core.errors import ConfigError
-from armtrack_cli.detect.palm_blobs import PalmBlobDetector, PalmBlobSettings
+from armtrack_cli.detect.palm_blobs import CENTROIDS, PalmBlobDetector, PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings, PatchTracker
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.session.config import load_session, require
@@ -29,6 +29,9 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
     start = time.perf_counter()
     if session.palm is not None:
         settings = section(doc, "detect.palm", PalmBlobSettings, where)
+        if settings.centroid not in CENTROIDS:
+            raise ConfigError(where, f"[detect.palm] centroid = {settings.centroid!r} is not "
+                              "one of " + ", ".join(CENTROIDS))
         det = PalmBlobDetector(session.palm.colour.low, session.palm.colour.high, settings)
         rows = []
         for i, t, img in iter_frames_ahead(video):
@@ -38,7 +41,8 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
                 on_frame(i + 1)
         table = pd.DataFrame(rows, columns=["frame", "t", "blob", "u", "v", "area", "score"])
         summary = {"blobs": len(rows), "frames_with_6_or_more": int(
-            (table.groupby("frame").size() >= 6).sum()) if rows else 0}
+            (table.groupby("frame").size() >= 6).sum()) if rows else 0,
+                   "frames_searched_whole": det.full_searches}
     else:
         if session.camera.patch is None:
             raise ConfigError(session.toml_path, "[camera] patch is missing, which detect needs",

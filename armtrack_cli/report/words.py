@@ -18,7 +18,9 @@ SOURCES = {"pf-constraint": "Tao & Hu 2008", "ekf": "Tao & Hu 2008", "pf": "Tao 
            "arm-smoother": "armtrack, after Tao & Hu 2008"}
 TASKS = {"circle": "circles on the table", "rectangle": "rectangles on the table",
          "reach": "reaching forward and back", "figure8": "figures of eight on the table",
-         "wrist-rom": "wrist range of motion", "reach-grasp": "reach and grasp"}
+         "wrist-rom": "wrist range of motion", "reach-grasp": "reach and grasp",
+         "wrist-deviation": "wrist radial and ulnar deviation",
+         "wrist-flexion": "wrist flexion and extension"}
 
 # measure: (plain name, display unit, decimals); values are shown in the CSV's own unit
 MEASURES = {

@@ -19,7 +19,7 @@ from armtrack_cli.simulate.kinematics import min_jerk
 MARKERS = ("WRIST", "MCP2", "MCP3", "MCP4", "MCP5", "CMC1")
 LINKS_M = (0.0, 0.085, 0.080, 0.075, 0.070, 0.045)
 ANGLES_DEG = (0.0, 14.0, 0.0, -13.0, -26.0, 52.0)  # in-plane angle from x_H (towards MCP3)
-HAND_TASKS = ("wrist-rom", "reach-grasp")
+HAND_TASKS = ("wrist-rom", "reach-grasp", "wrist-deviation", "wrist-flexion")
 NEUTRAL_S = 1.5
 
 
@@ -43,6 +43,12 @@ def R_FH(flexion, deviation, pronation, side: str = "right") -> np.ndarray:
 ROM_SEQUENCE = [(55, 0, 0), (0, 0, 0), (-45, 0, 0), (0, 0, 0), (0, 18, 0), (0, 0, 0),
                 (0, -28, 0), (0, 0, 0), (0, 0, 45), (0, 0, 0), (0, 0, -40), (0, 0, 0)]
 GRASP_SEQUENCE = [(10, -8, 20), (20, -12, 35), (20, -12, 35), (0, 0, 0)]
+# Cordella's Fig. 4: abduction/adduction (radial/ulnar deviation) from 25° to −25°, twice;
+# and flexion-extension ±45°, twice
+DEVIATION_SEQUENCE = [(0, 25, 0), (0, 0, 0), (0, -25, 0), (0, 0, 0)] * 2
+FLEXION_SEQUENCE = [(45, 0, 0), (0, 0, 0), (-45, 0, 0), (0, 0, 0)] * 2
+SEQUENCES = {"wrist-rom": ROM_SEQUENCE, "reach-grasp": GRASP_SEQUENCE,
+             "wrist-deviation": DEVIATION_SEQUENCE, "wrist-flexion": FLEXION_SEQUENCE}
 
 
 @dataclass(frozen=True)
@@ -55,7 +61,7 @@ class HandMotion:
 
     def angles(self, t: np.ndarray) -> np.ndarray:
         """(N, 3) flexion, deviation, pronation in radians."""
-        seq = ROM_SEQUENCE if self.task == "wrist-rom" else GRASP_SEQUENCE
+        seq = SEQUENCES[self.task]
         move = max(self.duration_s - 2 * NEUTRAL_S, 1e-6)
         u = np.clip((np.asarray(t, float) - NEUTRAL_S) / move, 0, 1) * len(seq)
         k = np.minimum(np.floor(u).astype(int), len(seq) - 1)
@@ -64,7 +70,7 @@ class HandMotion:
         return pts[k] * (1 - f) + pts[k + 1] * f
 
     def wrist(self, t: np.ndarray) -> np.ndarray:
-        if self.task == "wrist-rom":
+        if self.task != "reach-grasp":  # the forearm rests on the table
             return np.broadcast_to(self.wrist0, np.shape(t) + (3,)).copy()
         move = max(self.duration_s - 2 * NEUTRAL_S, 1e-6)
         u = np.clip((np.asarray(t, float) - NEUTRAL_S) / move, 0, 1)
