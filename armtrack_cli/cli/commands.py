@@ -346,6 +346,8 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
+    if static and not mocap:
+        raise click.UsageError("--static is the static trial of a --from-mocap recording")
     if mocap:
         ms = pipeline.MocapSimSettings(seed=seed, imu_preset=imu_preset, imu_errors={
             k: v for k, v in errors.items() if v is not None}, distortion=not no_distortion,

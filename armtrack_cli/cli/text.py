@@ -117,8 +117,10 @@ def _models(info) -> list[str]:
     lines = []
     if "arm" in info:
         a = info["arm"]
-        lines.append(f"arm       L1 {a['upper_arm_m']} m, L2 {a['forearm_m']} m, shoulder "
-                     f"{a['shoulder_m']} m in W")
+        def m(v):
+            return '"auto"' if v == "auto" else f"{v} m"
+        lines.append(f"arm       L1 {m(a['upper_arm_m'])}, L2 {m(a['forearm_m'])}, shoulder "
+                     f"{m(a['shoulder_m'])}" + ("" if a["shoulder_m"] == "auto" else " in W"))
         if a.get("estimate"):
             lines.append("          " + arm_estimate_line(a["estimate"]))
         elif "estimate" in a:

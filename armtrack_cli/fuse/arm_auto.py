@@ -16,9 +16,9 @@ solves for everything at once, a batch least-squares over a stretch of the sessi
                      elbow E_k = p_k − L2 (f_k + δθ_k × f_k) (eq. 2, corrected axis)
                (L − L̄) / σ_L                          a weak anthropometric prior on L1, L2
 
-solved by Levenberg-Marquardt with the analytic sparse Jacobian, from six starting shoulders. The SDs of S, L1, L2 are
-the Gauss-Newton covariance at the solution, scaled by the residuals' reduced χ² when that
-exceeds 1 (the model's noise levels are then too optimistic for the data).
+solved by Levenberg-Marquardt with the analytic sparse Jacobian, from six starting shoulders.
+The SDs of S, L1, L2 are the Gauss-Newton covariance at the solution, scaled by the residuals'
+reduced χ² when that exceeds 1 (the model's noise levels are then too optimistic for the data).
 """
 
 from __future__ import annotations
@@ -280,9 +280,10 @@ def levenberg_marquardt(fun, jac, x, *, iters: int = 200, tol: float = 1e-10):
 
 def estimate_arm(steps: Steps, uv: np.ndarray, q_WB: np.ndarray, t: np.ndarray,
                  proj: Projection, forearm_B: np.ndarray, declared: dict,
-                 s: AutoSettings = AutoSettings()) -> ArmEstimate:
+                 s: AutoSettings | None = None) -> ArmEstimate:
     """S, L1, L2 (those ``declared`` gives as None) from frames t (session s), their steps,
     detections uv (NaN: none) and IMU orientations."""
+    s = s or AutoSettings()
     f_W = quat.rotate(q_WB, forearm_B)
     fixed = np.r_[declared["shoulder_m"] if declared["shoulder_m"] is not None else np.zeros(3),
                   declared["upper_arm_m"] or 0.0, declared["forearm_m"] or 0.0]

@@ -14,10 +14,9 @@ from armtrack_cli.session.arm_file import read_arm_estimate
 from armtrack_cli.session.config import Session
 
 
-def estimate(session: Session, prepared, settings: arm_auto.AutoSettings = arm_auto.AutoSettings()
-             ) -> arm_auto.ArmEstimate:
+def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
     """The free parts of the arm from the most varied stretch of the filtered frames."""
-    inp, st = prepared.inputs, settings
+    inp, st = prepared.inputs, arm_auto.AutoSettings()
     f_W = models.quat.rotate(inp.q_WB, session.imu.forearm_unit)
     w = arm_auto.varied_stretch(inp.z[::st.stride], f_W[::st.stride], st.max_frames)
     a, b = w.start * st.stride, min(inp.z.shape[0], w.stop * st.stride)

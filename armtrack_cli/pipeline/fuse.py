@@ -23,8 +23,8 @@ from armtrack_cli.pipeline import arm_model
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.kinematics import kinematics_table
 from armtrack_cli.pipeline.palm import fuse_palm
-from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.arm_file import write_arm_estimate
+from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
 from armtrack_cli.session.outputs import output_set, write_table

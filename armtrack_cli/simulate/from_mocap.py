@@ -35,7 +35,7 @@ from armtrack_cli.simulate.camera import default_camera, project
 from armtrack_cli.simulate.capture import QTM_TO_WORLD, qualisys_markers
 from armtrack_cli.vision.charuco import make_board
 
-WRIST_W_XY = (0.16, 0.20)  # the middle of the wrist's workspace in W, just past the board
+WRIST_W_XY = (0.16, 0.30)  # the middle of the wrist's workspace in W, just past the board
 WRIST_ABOVE_TABLE_M = 0.035  # the wrist centre's height when the forearm rests on the table
 MIN_SPAN_S = 2.0
 
@@ -163,12 +163,11 @@ def place_camera(wrist_W: np.ndarray, normal_W: np.ndarray, s: ArmSimSettings):
     wrist's workspace, as a lab would set it up for the task: of the bearings within ±45° of
     straight across, the one that sees the back of the wrist (the patch, ``normal_W``) on the
     most frames, moved back and up until the whole wrist path and the board are in view."""
-    lo, hi = wrist_W.min(0), wrist_W.max(0)
-    target = 0.5 * (lo + hi)
     sq = BOARD["squares"]
     bw, bh = sq[0] * BOARD["square_m"], sq[1] * BOARD["square_m"]
     board = np.array([[0, 0, 0], [bw, 0, 0], [bw, -bh, 0], [0, -bh, 0.0]])
     pts = np.concatenate([wrist_W[:: max(1, wrist_W.shape[0] // 400)], board])
+    target = 0.5 * (pts.min(0) + pts.max(0))
     best = (-1.0, None)
     for bearing in np.deg2rad([0, -15, 15, -30, 30, -45, 45]):
         u = np.array([np.sin(bearing), -np.cos(bearing), 0.0])  # from the target to the camera
@@ -178,7 +177,7 @@ def place_camera(wrist_W: np.ndarray, normal_W: np.ndarray, s: ArmSimSettings):
                                  k1=-0.12 if s.distortion else 0.0,
                                  k2=0.03 if s.distortion else 0.0, eye=eye, target=target)
             px, z = project(cam, pts)
-            m = np.array([0.04 * s.width, 0.04 * s.height])
+            m = np.array([0.05 * s.width, 0.05 * s.height])
             if (z > 0.1).all() and ((px > m) & (px < [s.width, s.height] - m)).all():
                 break
         seen = float(np.mean(np.einsum("ni,ni->n", normal_W, cam.centre_W - wrist_W) > 0))
