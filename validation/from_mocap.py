@@ -102,6 +102,12 @@ def main() -> None:
                 pipeline.simulate(folder, ArmSimSettings(task=task, seed=seed))
                 synthetic.append(row(folder.name, task, one(folder)))
                 print(synthetic[-1], file=sys.stderr)
+        # control: the same circle with an exact IMU orientation (no gravity leak, exact axis)
+        folder = Path(tmp) / "circle-s0-exact-orientation"
+        pipeline.simulate(folder, ArmSimSettings(task="circle", seed=0,
+                                                 imu_errors={"orientation_rms_deg": 0.0}))
+        synthetic.append(row(folder.name, "circle, IMU orientation exact (control)", one(folder)))
+        print(synthetic[-1], file=sys.stderr)
         shutil.rmtree(tmp, ignore_errors=True)
     write(Path(args.out), mocap, synthetic, time.perf_counter() - t0, args.seeds)
 
