@@ -23,20 +23,11 @@ from armtrack_cli.core.errors import GroundTruthError
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.pipeline.simulate import write_arm_session
 from armtrack_cli.session.files import regular_file
-from armtrack_cli.session.groundtruth import read_markers
+from armtrack_cli.session.groundtruth import find_static_trial, read_markers
 from armtrack_cli.simulate.from_mocap import MocapMotion, MocapSimSettings, simulate_mocap
 
 LANDMARKS = ("GTH", "LEP", "MEP", "SPR", "SPU")
 CLUSTERS = {"GTH": "SHO", "LEP": "LAR", "MEP": "LAR", "SPR": "LAR", "SPU": "LAR"}
-
-
-def find_static(trial: Path) -> Path:
-    """The static trial beside ``trial``: the one file whose name holds 'static'."""
-    found = sorted(p for p in trial.parent.glob("*.csv") if "static" in p.name.lower())
-    if len(found) != 1:
-        raise GroundTruthError(trial, f"has {len(found)} static trials (*static*.csv) beside it",
-                               "name the static calibration trial with --static")
-    return found[0]
 
 
 def _cluster(static: MarkerTrajectories, trial: MarkerTrajectories, prefix: str
@@ -112,7 +103,7 @@ def simulate_from_mocap(out: str | Path, trial_path: str | Path, settings: Mocap
     """Write a session following the recording ``trial_path`` (and OUT.truth.npz beside it)."""
     out, trial_path = Path(out), regular_file(trial_path, GroundTruthError,
                                               "a motion-capture recording")
-    static_path = Path(static_path) if static_path else find_static(trial_path)
+    static_path = Path(static_path) if static_path else find_static_trial(trial_path)
     trial, static = read_markers(trial_path), read_markers(static_path)
     side = moving_side(trial)
     motion = motion_from(trial, static, side)
