@@ -61,21 +61,29 @@ def one(folder: Path) -> dict:
     est = read_arm_estimate(auto_folder / "armtrack")
     arm = np.load(folder.parent / f"{folder.name}.truth.npz")["arm"]
     d_sh = (np.array(est["shoulder_m"]) - arm[:3]) * 100
-    return {"declared": declared, "auto": auto, "d_shoulder": d_sh,
+    tr = np.load(folder.parent / f"{folder.name}.truth.npz")
+    moves = np.linalg.norm(tr["shoulder"] - tr["shoulder"].mean(0), axis=1).max() * 100
+    l1 = np.percentile(np.linalg.norm(tr["elbow"] - tr["shoulder"], axis=1), [5, 95]) * 100
+    return {"moves": moves, "l1": l1, "declared": declared, "auto": auto, "d_shoulder": d_sh,
             "d_L1": (est["upper_arm_m"] - arm[3]) * 100, "d_L2": (est["forearm_m"] - arm[4]) * 100,
             "sd": np.r_[est["shoulder_sd_m"], est["upper_arm_sd_m"], est["forearm_sd_m"]] * 100}
 
 
-def row(name: str, what: str, r: dict) -> str:
+def row(name: str, what: str, r: dict, real: bool = False) -> str:
     ok = (np.linalg.norm(r["d_shoulder"]) <= 2 and abs(r["d_L1"]) <= 1 and abs(r["d_L2"]) <= 1
           and r["auto"] <= 1.2 * r["declared"])
     sh = ", ".join(f"{v:+.1f}" for v in r["d_shoulder"])
     sd = ", ".join(f"{v:.1f}" for v in r["sd"][:3])
-    return (f"| {name} | {what} | {r['declared']:.2f} | {r['auto']:.2f} | {sh} ({sd}) | "
+    body = f"| {r['moves']:.1f} | {r['l1'][0]:.1f}-{r['l1'][1]:.1f} " if real else ""
+    return (f"| {name} | {what} {body}| {r['declared']:.2f} | {r['auto']:.2f} | {sh} ({sd}) | "
             f"{r['d_L1']:+.1f} ({r['sd'][3]:.1f}) | {r['d_L2']:+.1f} ({r['sd'][4]:.1f}) | "
             f"{'yes' if ok else 'no'} |")
 
 
+REAL = ["| session | motion | shoulder moves, max from its mean (cm) | abs(E − S), 5-95 % (cm) "
+        "| wrist RMSE, declared arm (cm) | wrist RMSE, auto arm (cm) | "
+        "shoulder error x, y, z (SD) cm | L1 error (SD) cm | L2 error (SD) cm | all goals |",
+        "|---|---|---|---|---|---|---|---|---|---|"]
 HEADER = ["| session | motion | wrist RMSE, declared arm (cm) | wrist RMSE, auto arm (cm) | "
           "shoulder error x, y, z (SD) cm | L1 error (SD) cm | L2 error (SD) cm | all goals |",
           "|---|---|---|---|---|---|---|---|"]
@@ -94,7 +102,7 @@ def main() -> None:
                 folder = Path(tmp) / trial
                 pipeline.simulate_from_mocap(folder, UE_ADL / f"ADL001{trial}.csv",
                                              MocapSimSettings())
-                mocap.append(row(trial, what, one(folder)))
+                mocap.append(row(trial, what, one(folder), real=True))
                 print(mocap[-1], file=sys.stderr)
         for task in ("circle", "rectangle", "reach", "figure8"):
             for seed in range(args.seeds):
@@ -124,9 +132,29 @@ def write(out: Path, mocap: list[str], synthetic: list[str], wall: float, seeds:
         "of the auto arm are against the arm a lab would declare (the shoulder point's mean, the "
         "lengths' medians), which is not a sphere's centre: the shoulder point (greater "
         "tubercle) moves 1-7 cm and |E − S| varies by 1-7 cm within a trial.", "",
-        *HEADER, *(mocap or ["| (../shared/realdata/ue-adl/ not present) |||||||"]), "",
+        *REAL, *(mocap or ["| (../shared/realdata/ue-adl/ not present) |||||||"]), "",
         f"## Simulated tasks (fixed shoulder, exact arm; {seeds} seed(s) each)", "",
-        *HEADER, *synthetic, ""]
+        *HEADER, *synthetic, "",
+        "## Reading the tables", "",
+        "**Real motion.** The arm of Tao & Hu is a fixed sphere; a real one is not. The shoulder "
+        "point moves with the trunk and scapula and the shoulder-to-elbow distance changes by "
+        "several cm within a trial (columns 3-4: soft tissue under the clusters and a landmark "
+        "that is not a joint centre). The declared model (mean shoulder, median lengths) is then "
+        "off where the hand is far from its median pose, and where the camera ray grazes the "
+        "sphere the estimate runs along the ray. The auto arm is the sphere that best explains "
+        "this session's wrist, forearm axis and accelerations, not the landmark's mean: its "
+        "'errors' against the declared arm are large while its wrist RMSE is lower than the "
+        "declared model's on these trials. The shoulder/length goals, set against a fixed "
+        "shoulder, cannot be met by any fixed sphere here; the drifting shoulder state of the "
+        "orientation-aware smoother (issue 14, another branch) is the remedy the issue names.", "",
+        "**Simulated tasks.** The control row (exact IMU orientation) shows the estimator "
+        "meeting the goals on a circle. With the MTw-class 1° orientation error the accelerometer "
+        "reads a gravity leak of up to g·sin 1° = 0.17 m/s², the size of the tasks' own "
+        "accelerations (a 10 cm circle in 5 s: 0.16 m/s²), so the IMU cannot fix the wrist's depth "
+        "along the camera ray to better than a few cm over the slow table-top tasks, and the "
+        "sphere's centre moves with it (along the camera's line of sight, the 'SD' columns say "
+        "so). Declared tape-measured lengths (`upper_arm_m`, `forearm_m`) with `shoulder_m = "
+        "\"auto\"` remove two of the five unknowns.", ""]
     out.write_text("\n".join(lines))
 
 
