@@ -131,7 +131,7 @@ def write(out: Path, mocap: list[str], synthetic: list[str], wall: float, seeds:
         "Subject ADL001 of the UE-ADL database (Vicon 100 Hz, MIT licence), seed 0. The errors "
         "of the auto arm are against the arm a lab would declare (the shoulder point's mean, the "
         "lengths' medians), which is not a sphere's centre: the shoulder point (greater "
-        "tubercle) moves 1-7 cm and |E − S| varies by 1-7 cm within a trial.", "",
+        "tubercle) moves and |E − S| varies within a trial (columns 3-4).", "",
         *REAL, *(mocap or ["| (../shared/realdata/ue-adl/ not present) |||||||"]), "",
         f"## Simulated tasks (fixed shoulder, exact arm; {seeds} seed(s) each)", "",
         *HEADER, *synthetic, "",
@@ -148,7 +148,8 @@ def write(out: Path, mocap: list[str], synthetic: list[str], wall: float, seeds:
         "shoulder, cannot be met by any fixed sphere here; the drifting shoulder state of the "
         "orientation-aware smoother (issue 14, another branch) is the remedy the issue names.", "",
         "**Simulated tasks.** The control row (exact IMU orientation) shows the estimator "
-        "meeting the goals on a circle. With the MTw-class 1° orientation error the accelerometer "
+        "meeting the shoulder and length goals on a circle, the wrist near its goal. With the "
+        "MTw-class 1° orientation error the accelerometer "
         "reads a gravity leak of up to g·sin 1° = 0.17 m/s², the size of the tasks' own "
         "accelerations (a 10 cm circle in 5 s: 0.16 m/s²), so the IMU cannot fix the wrist's depth "
         "along the camera ray to better than a few cm over the slow table-top tasks, and the "
