@@ -95,3 +95,15 @@ def test_a_command_names_the_section_it_lacks(tmp_path):
     s = load_session(write_session(tmp_path / "s", '[imu]\nfile = "imu.txt"\n'))
     with pytest.raises(ConfigError, match=r"has no \[arm\] section"):
         require(s, "arm")
+
+
+def test_the_arm_may_be_auto(tmp_path):
+    """Any of the three [arm] values may be "auto" (fuse estimates it): NaN until then."""
+    s = load_session(write_session(tmp_path / "a", FULL.replace(
+        "shoulder_m = [0.10, 0.45, 0.32]", 'shoulder_m = "auto"').replace(
+        "forearm_m = 0.27", 'forearm_m = "auto"')))
+    assert s.arm.auto == ("shoulder_m", "forearm_m") and s.arm.upper_arm_m == 0.31
+    assert np.isnan(s.arm.shoulder_m).all() and np.isnan(s.arm.forearm_m)
+    with pytest.raises(ConfigError, match=r"\[arm\] upper_arm_m = .automatic. is a string"):
+        load_session(write_session(tmp_path / "b", FULL.replace(
+            "upper_arm_m = 0.31", 'upper_arm_m = "automatic"')))

@@ -287,8 +287,8 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
               "wrist-flexion: ±45° flexion-extension, each twice).")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Random seed (same seed, same bytes).")
-@click.option("--duration", type=Finite(min=4.0, max=3600.0), default=20.0,
-              show_default=True, help="Length of the video, s.")
+@click.option("--duration", type=Finite(min=4.0, max=3600.0),
+              help="Length of the video, s  [default: 20; with --from-mocap the recording's].")
 @click.option("--imu-format", type=click.Choice(["xsens", "csv", "mcap"]), default="xsens",
               show_default=True, help="IMU file written: Xsens MT Manager export, generic CSV, "
               "ROS 2 MCAP.")
@@ -328,13 +328,20 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
               help="Palm tasks: hide palm marker MARKER (index 0-5) from START for DURATION s.")
 @click.option("--clutter2", type=Finite(0.0, 3600.0), metavar="START",
               help="Palm tasks: a second clutter blob appears beside the hand at START s.")
+@click.option("--from-mocap", "mocap", type=click.Path(dir_okay=False), metavar="FILE",
+              help="Follow a real recording (Vicon CSV, QTM TSV or C3D with technical "
+              "clusters) instead of a task; --duration caps its length.")
+@click.option("--static", type=click.Path(dir_okay=False), metavar="FILE",
+              help="With --from-mocap: the static calibration trial (default: the one "
+              "*static*.csv beside FILE).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON summary for scripts.")
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
              distractor, moving_distractor, clutter, occlusions, no_distortion, calib_images,
-             recorded, undeclared_imu_offset, hides, clutter2, force, as_json, out_dir) -> None:
+             recorded, undeclared_imu_offset, hides, clutter2, mocap, static, force, as_json,
+             out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
     occ = []
@@ -351,6 +358,18 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
 
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
+    target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
+    if static and not mocap:
+        raise click.UsageError("--static is the static trial of a --from-mocap recording")
+    if mocap:
+        ms = pipeline.MocapSimSettings(seed=seed, imu_preset=imu_preset, imu_errors={
+            k: v for k, v in errors.items() if v is not None}, distortion=not no_distortion,
+            **({"duration_s": duration} if duration else {}))
+        result = pipeline.simulate_from_mocap(target, mocap, ms, static_path=static,
+                                              imu_format=imu_format, force=force)
+        emit(result, as_json, text.simulate_lines(result))
+        return
+    duration = duration or 20.0
     if task in HAND_TASKS:
         settings = pipeline.PalmSimSettings(task=task, seed=seed, duration_s=duration, fps=fps,
                                    qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
@@ -365,7 +384,6 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
             occlusions=tuple(occ), distortion=not no_distortion,
             declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images,
             **({"recorded": recorded.strftime("%Y-%m-%dT%H:%M:%S")} if recorded else {}))
-    target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
     n_frames = int(round(duration * fps))
     with progress(n_frames, "rendering", quiet=as_json) as bar:
         result = pipeline.simulate(target, settings, imu_format=imu_format, force=force,

@@ -32,7 +32,8 @@ def fuse_lines(folder: str, r: dict[str, Any]) -> list[str]:
     return [f"{folder}: {r['method']}: {r['frames']} frames ({r['detections_used']} with a "
             f"detection), {r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"] + (
         [f"  initialised from {r['initialised_from']}: residual {r['init_residual_px']} px, "
-         f"{r['init_residual_mm']} mm"] if "init_residual_px" in r else [])
+         f"{r['init_residual_mm']} mm"] if "init_residual_px" in r else []) + (
+        ["  arm " + arm_estimate_line(r["arm_auto"])] if r.get("arm_auto") else [])
 
 
 def compare_lines(folder: str, r: dict[str, Any]) -> list[str]:
@@ -103,12 +104,27 @@ def _camera(info) -> list[str]:
     return lines
 
 
+def arm_estimate_line(e: dict[str, Any]) -> str:
+    """The arm fuse estimated for "auto", ± 1 SD, in cm."""
+    sh = ", ".join(f"{v * 100:.1f}±{d * 100:.1f}" for v, d in zip(e["shoulder_m"],
+                                                              e["shoulder_sd_m"]))
+    return (f"estimated ({', '.join(e['estimated'])} from {e['from_s']:g}-{e['to_s']:g} s): "
+            f"shoulder [{sh}] cm, L1 {e['upper_arm_m'] * 100:.1f}±{e['upper_arm_sd_m'] * 100:.1f} "
+            f"cm, L2 {e['forearm_m'] * 100:.1f}±{e['forearm_sd_m'] * 100:.1f} cm")
+
+
 def _models(info) -> list[str]:
     lines = []
     if "arm" in info:
         a = info["arm"]
-        lines.append(f"arm       L1 {a['upper_arm_m']} m, L2 {a['forearm_m']} m, shoulder "
-                     f"{a['shoulder_m']} m in W")
+        def m(v):
+            return '"auto"' if v == "auto" else f"{v} m"
+        lines.append(f"arm       L1 {m(a['upper_arm_m'])}, L2 {m(a['forearm_m'])}, shoulder "
+                     f"{m(a['shoulder_m'])}" + ("" if a["shoulder_m"] == "auto" else " in W"))
+        if a.get("estimate"):
+            lines.append("          " + arm_estimate_line(a["estimate"]))
+        elif "estimate" in a:
+            lines.append("          (\"auto\": estimated by `armtrack fuse`, not run yet)")
     if "palm" in info:
         lines.append(f"palm      markers {', '.join(info['palm']['markers'])}")
     return lines

@@ -31,12 +31,15 @@ from armtrack_cli.pipeline.detect import detect
 from armtrack_cli.pipeline.export import export
 from armtrack_cli.pipeline.fuse import fuse
 from armtrack_cli.pipeline.info import frame_count, info
+from armtrack_cli.pipeline.mocap import simulate_from_mocap
 from armtrack_cli.pipeline.report import report
 from armtrack_cli.pipeline.run import STAGES, run
 from armtrack_cli.pipeline.simulate import simulate, simulate_command
 from armtrack_cli.simulate.arm_session import ArmSimSettings
+from armtrack_cli.simulate.from_mocap import MocapSimSettings
 from armtrack_cli.simulate.palm_session import PalmSimSettings
 
 __all__ = ["info", "frame_count", "calibrate", "detect", "fuse", "compare", "report", "run",
            "run_many", "export",
-           "STAGES", "simulate", "simulate_command", "ArmSimSettings", "PalmSimSettings"]
+           "STAGES", "simulate", "simulate_command", "ArmSimSettings", "PalmSimSettings",
+           "MocapSimSettings", "simulate_from_mocap"]

@@ -20,9 +20,11 @@ from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
+from armtrack_cli.pipeline import arm_model
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.kinematics import kinematics_table
 from armtrack_cli.pipeline.palm import fuse_palm
+from armtrack_cli.session.arm_file import write_arm_estimate
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
@@ -104,6 +106,12 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
                           "use inertial, ekf, ukf or pf, or add the arm model")
     dest = out_dir(session, out)
     p = prepare(session, dest, s)
+    auto = None
+    if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
+        auto = arm_model.estimate(session, p)
+        session = arm_model.with_arm(session, auto.shoulder, auto.upper_arm_m, auto.forearm_m)
+        p = dataclasses.replace(p, arm=dataclasses.replace(
+            p.arm, shoulder=auto.shoulder, L1=auto.upper_arm_m, L2=auto.forearm_m))
     inp = p.inputs
     if p.arm is not None:
         miss = models.ray_misses_arm(p.projection, inp.z[0], p.arm, inp.q_WB[0])
@@ -138,16 +146,20 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         warnings.warn(f"{dest / name}: {far.sum()} of {len(far)} frames put the wrist where no "
                       f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
-                "frames_beyond_reach": int(far.sum()), **(est.summary or {})}
+                "frames_beyond_reach": int(far.sum()), **(est.summary or {}),
+                **({"arm_auto": auto.as_dict()} if auto else {})}
     q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
     q_WB[p.frames] = inp.q_WB if est.q_WB is None else est.q_WB
     kin = kinematics_table(table, session, q_WB=q_WB)
     with output_set():
         write_table(dest / name, table, command="fuse", settings=settings)
         write_table(dest / f"kinematics-{s.method}.csv", kin, command="fuse", settings=settings)
+        if auto:
+            write_arm_estimate(dest, auto.as_dict())
     n = int(p.frames.size)
     return {"method": s.method, "trajectory": str(dest / name), "frames": n,
             "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),
             "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
             "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how,
-            "frames_beyond_reach": int(far.sum()), **(est.summary or {})}
+            "frames_beyond_reach": int(far.sum()), **(est.summary or {}),
+            **({"arm_auto": auto.as_dict()} if auto else {})}

@@ -14,6 +14,7 @@ import pandas as pd
 
 from armtrack_cli.compare.errors import truth_at
 from armtrack_cli.core.errors import ArmtrackError, ConfigError
+from armtrack_cli.pipeline import arm_model
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.report import Quality, SessionReport, render
 from armtrack_cli.session.camera_yaml import read_camera_yaml
@@ -88,6 +89,7 @@ def gather(path: str | Path, out: str | Path | None = None) -> SessionReport:
     """Everything one session's pages show, from its work folder."""
     session = load_session(path)
     work = WorkFolder(out_dir(session, out))
+    session = arm_model.resolved(session, work.path)
     kind = session.kind
     method = _method(work, kind)
     notes: list[str] = []

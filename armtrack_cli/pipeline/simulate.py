@@ -79,13 +79,20 @@ def simulate(out: str | Path, settings, *, imu_format: str = "xsens",
     out = Path(out)
     if isinstance(settings, palm_session.PalmSimSettings):
         return _simulate_palm(out, settings, force=force, on_frame=on_frame)
-    sim = simulate_arm(settings)
+    return write_arm_session(out, simulate_arm(settings), imu_format=imu_format,
+                             command=simulate_command(out.name, settings, imu_format),
+                             force=force, on_frame=on_frame)
+
+
+def write_arm_session(out: Path, sim, *, imu_format: str, command: str, force: bool,
+                      on_frame=None, side: str = "right") -> dict[str, Any]:
+    """An arm session folder from a simulation (synthetic task or recorded motion)."""
+    settings = sim.settings
     imu_file = IMU_FILES[imu_format]
     with staged_folder(out, force=force) as tmp:
         write_text(tmp / "session.toml", session_toml(settings, session_id=out.name,
-                                                      imu_file=imu_file,
-                                                      command=simulate_command(out.name, settings,
-                                                                               imu_format)))
+                                                      imu_file=imu_file, command=command,
+                                                      side=side))
         _write_intrinsics(tmp, sim.camera, settings)
         i = sim.imu
         if imu_format == "xsens":

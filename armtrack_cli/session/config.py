@@ -155,14 +155,20 @@ def _meta(path: Path, root: Path, table: Any) -> SessionMeta:
 
 
 def _arm(path: Path, table: Any) -> ArmConfig:
+    """[arm]: each of the three a value or "auto" (estimated from the session by fuse: NaN here)."""
     sec = _Section(path, "arm", table, ("upper_arm_m", "forearm_m", "shoulder_m"))
     units = "lengths are in metres (0.31, not 310 or 31)"
-    l1 = sec.number("upper_arm_m", required=True, lo=0.05, hi=1.0, unit="m", hint=units)
-    l2 = sec.number("forearm_m", required=True, lo=0.05, hi=1.0, unit="m", hint=units)
-    sh = sec.vector("shoulder_m", 3, required=True)
+    auto = tuple(k for k in ("shoulder_m", "upper_arm_m", "forearm_m") if table.get(k) == "auto")
+    for k in auto:
+        sec.get(k)
+    l1 = np.nan if "upper_arm_m" in auto else sec.number(
+        "upper_arm_m", required=True, lo=0.05, hi=1.0, unit="m", hint=units + ', or "auto"')
+    l2 = np.nan if "forearm_m" in auto else sec.number(
+        "forearm_m", required=True, lo=0.05, hi=1.0, unit="m", hint=units + ', or "auto"')
+    sh = [np.nan] * 3 if "shoulder_m" in auto else sec.vector("shoulder_m", 3, required=True)
     if max(abs(x) for x in sh) > 10:
         sec.fail("shoulder_m", f"= {sh} is more than 10 m from the board origin", units)
-    return ArmConfig(l1, l2, np.array(sh))
+    return ArmConfig(l1, l2, np.array(sh, float), auto)
 
 
 def _board(sec: _Section) -> BoardConfig | None:

@@ -64,3 +64,12 @@ def body_rotation_W(traj: MarkerTrajectories, body: str, to_world: np.ndarray,
         raise GroundTruthError(traj.path, f"has no rigid body {body!r} ([groundtruth] hand in "
                                f"{toml.name})", f"its bodies are {', '.join(traj.names)}")
     return to_world[:3, :3] @ traj.rotations[:, traj.names.index(body)]
+
+
+def find_static_trial(trial: Path) -> Path:
+    """The static calibration trial beside a movement trial: the one *static*.csv there."""
+    found = sorted(p for p in Path(trial).parent.glob("*.csv") if "static" in p.name.lower())
+    if len(found) != 1:
+        raise GroundTruthError(trial, f"has {len(found)} static trials (*static*.csv) beside it",
+                               "name the static calibration trial with --static")
+    return found[0]

@@ -16,6 +16,7 @@ import numpy as np
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.methods import BUILT, NEEDS
 from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStream, time_gaps
+from armtrack_cli.session.arm_file import read_arm_estimate
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.groundtruth import read_markers
@@ -157,8 +158,12 @@ def describe(session: Session, *, imu_rate_hz: float | None = None,
         out["patch"] = {"hsv_low": list(cam.patch.low), "hsv_high": list(cam.patch.high)}
         have.add("patch")
     if session.arm is not None:
-        out["arm"] = {"upper_arm_m": session.arm.upper_arm_m, "forearm_m": session.arm.forearm_m,
-                      "shoulder_m": session.arm.shoulder_m.tolist()}
+        a = session.arm
+        out["arm"] = {k: "auto" if k in a.auto else v for k, v in (
+            ("upper_arm_m", a.upper_arm_m), ("forearm_m", a.forearm_m),
+            ("shoulder_m", a.shoulder_m.tolist()))}
+        if a.auto:  # fuse's estimate in the default work folder, when it has run
+            out["arm"]["estimate"] = read_arm_estimate(session.root / "armtrack")
         have.add("arm")
     if session.palm is not None:
         out["palm"] = {"markers": list(session.palm.markers), "link_m": list(session.palm.link_m)}

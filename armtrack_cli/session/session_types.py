@@ -25,6 +25,7 @@ class ArmConfig:
     upper_arm_m: float  # L1, shoulder to elbow
     forearm_m: float  # L2, elbow to wrist joint (IMU origin)
     shoulder_m: np.ndarray  # (3,) fixed shoulder joint in W, m
+    auto: tuple[str, ...] = ()  # the keys given as "auto" (NaN above until fuse estimates them)
 
 
 @dataclass(frozen=True)

@@ -176,7 +176,8 @@ def simulate_arm(s: ArmSimSettings) -> ArmSimulation:
                          frame_t, occluded)
 
 
-def session_toml(s: ArmSimSettings, *, session_id: str, imu_file: str, command: str) -> str:
+def session_toml(s: ArmSimSettings, *, session_id: str, imu_file: str, command: str,
+                 side: str = "right") -> str:
     """session.toml for a simulated arm session, in the contract's layout."""
     imu_off = f"{s.imu_offset_s:g}" if s.declare_imu_offset else '"auto"'
     lo, hi = PATCH_HSV
@@ -184,7 +185,7 @@ def session_toml(s: ArmSimSettings, *, session_id: str, imu_file: str, command: 
     return "\n".join([
         f"# simulated by: {command}",
         "[session]", f'id = "{session_id}"', 'subject = "SIM"', f"recorded = {s.recorded}",
-        f'task = "{s.task}"', 'side = "right"', "",
+        f'task = "{s.task}"', f'side = "{side}"', "",
         "[arm]", f"upper_arm_m = {s.upper_arm_m:g}", f"forearm_m = {s.forearm_m:g}",
         "shoulder_m = [" + ", ".join(f"{v:g}" for v in s.shoulder) + "]", "",
         "[camera]", 'video = "video.mp4"',

@@ -1,0 +1,51 @@
+"""`[arm] … = "auto"`: the arm model estimated from the session before fusing
+(fuse/arm_auto.py), and the session with it in place for every stage after fuse."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core.errors import DataError
+from armtrack_cli.fuse import arm_auto, models
+from armtrack_cli.session.arm_file import read_arm_estimate
+from armtrack_cli.session.config import Session
+
+
+def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
+    """The free parts of the arm from the most varied stretch of the filtered frames."""
+    inp, st = prepared.inputs, arm_auto.AutoSettings()
+    f_W = models.quat.rotate(inp.q_WB, session.imu.forearm_unit)
+    w = arm_auto.varied_stretch(inp.z[::st.stride], f_W[::st.stride], st.max_frames)
+    a, b = w.start * st.stride, min(inp.z.shape[0], w.stop * st.stride)
+    idx = np.arange(a, b, st.stride)
+    if np.isfinite(inp.z[idx]).all(axis=1).sum() < 20:
+        raise DataError(session.toml_path, f'[arm] "auto" needs at least 20 detections; the '
+                        f"stretch used has {int(np.isfinite(inp.z[idx]).all(axis=1).sum())}",
+                        "declare the arm model, or check detect")
+    arm = session.arm
+    declared = {k: (None if k in arm.auto else v) for k, v in
+                (("shoulder_m", arm.shoulder_m), ("upper_arm_m", arm.upper_arm_m),
+                 ("forearm_m", arm.forearm_m))}
+    return arm_auto.estimate_arm(arm_auto.coarsen(inp.steps, st.stride, a, b), inp.z[idx],
+                                 inp.q_WB[idx], prepared.t_frames[prepared.frames[idx]],
+                                 prepared.projection, session.imu.forearm_unit, declared, st)
+
+
+def with_arm(session: Session, shoulder, upper_arm_m: float, forearm_m: float) -> Session:
+    arm = dataclasses.replace(session.arm, shoulder_m=np.asarray(shoulder, float),
+                              upper_arm_m=float(upper_arm_m), forearm_m=float(forearm_m))
+    return dataclasses.replace(session, arm=arm)
+
+
+def resolved(session: Session, work: str | Path) -> Session:
+    """The session with fuse's estimate of an "auto" arm in place (unchanged otherwise; an
+    "auto" arm without an estimate stays NaN: missing, as it is)."""
+    if session.arm is None or not session.arm.auto:
+        return session
+    est = read_arm_estimate(work)
+    if est is None:
+        return session
+    return with_arm(session, est["shoulder_m"], est["upper_arm_m"], est["forearm_m"])

@@ -1,0 +1,164 @@
+"""Sessions from real human motion and the arm model from the data: `python validation/from_mocap.py`
+writes docs/validation-from-mocap.md (part of `make validate`; needs ../shared/realdata/ue-adl/).
+
+1. Every UE-ADL trial becomes a session (`armtrack simulate --from-mocap`, seed 0); the default
+   method runs with the arm declared as a lab would (shoulder at its mean, lengths at their
+   medians) and with `[arm] … = "auto"`, scored by compare against the recording.
+2. Simulated sessions of every task (circle, rectangle, reach, figure8) with the exact arm,
+   declared and "auto": the estimate's error against the true arm, and the wrist RMSE.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from armtrack_cli import pipeline  # noqa: E402
+from armtrack_cli.session.arm_file import read_arm_estimate  # noqa: E402
+from armtrack_cli.simulate.arm_session import ArmSimSettings  # noqa: E402
+from armtrack_cli.simulate.from_mocap import MocapSimSettings  # noqa: E402
+
+UE_ADL = REPO.parent / "shared" / "realdata" / "ue-adl"
+TASKS = {"AR1": "reach across", "CR1": "combing hair", "DL1": "drinking (left hand)",
+         "DR1": "drinking", "DR2": "drinking", "FR1": "forward reach", "FR2": "forward reach"}
+
+
+def as_auto(folder: Path, dest: Path) -> Path:
+    """A copy of the session whose [arm] is all "auto" (the video and IMU linked, not copied)."""
+    dest.mkdir(parents=True)
+    for f in folder.iterdir():
+        if f.is_file() and f.name != "session.toml":
+            (dest / f.name).symlink_to(f.resolve())
+    text = (folder / "session.toml").read_text()
+    for key in ("upper_arm_m", "forearm_m", "shoulder_m"):
+        text = re.sub(rf"^{key} = .*$", f'{key} = "auto"', text, flags=re.M)
+    (dest / "session.toml").write_text(text)
+    return dest
+
+
+def wrist_rmse(folder: Path, method: str = "pf-constraint") -> float:
+    pipeline.run(folder, through="fuse", methods=(method,))
+    rows = pipeline.compare(folder, methods=(method,))["rows"]
+    return next(r["rmse_cm"] for r in rows if r["joint"] == "wrist" and r["axis"] == "3d")
+
+
+def one(folder: Path) -> dict:
+    """Declared and auto on one session: wrist RMSE of each, and the estimate beside the
+    declared arm (cm)."""
+    declared = wrist_rmse(folder)
+    auto_folder = as_auto(folder, folder.parent / f"{folder.name}-auto")
+    auto = wrist_rmse(auto_folder)
+    est = read_arm_estimate(auto_folder / "armtrack")
+    arm = np.load(folder.parent / f"{folder.name}.truth.npz")["arm"]
+    d_sh = (np.array(est["shoulder_m"]) - arm[:3]) * 100
+    tr = np.load(folder.parent / f"{folder.name}.truth.npz")
+    moves = np.linalg.norm(tr["shoulder"] - tr["shoulder"].mean(0), axis=1).max() * 100
+    l1 = np.percentile(np.linalg.norm(tr["elbow"] - tr["shoulder"], axis=1), [5, 95]) * 100
+    return {"moves": moves, "l1": l1, "declared": declared, "auto": auto, "d_shoulder": d_sh,
+            "d_L1": (est["upper_arm_m"] - arm[3]) * 100, "d_L2": (est["forearm_m"] - arm[4]) * 100,
+            "sd": np.r_[est["shoulder_sd_m"], est["upper_arm_sd_m"], est["forearm_sd_m"]] * 100}
+
+
+def row(name: str, what: str, r: dict, real: bool = False) -> str:
+    ok = (np.linalg.norm(r["d_shoulder"]) <= 2 and abs(r["d_L1"]) <= 1 and abs(r["d_L2"]) <= 1
+          and r["auto"] <= 1.2 * r["declared"])
+    sh = ", ".join(f"{v:+.1f}" for v in r["d_shoulder"])
+    sd = ", ".join(f"{v:.1f}" for v in r["sd"][:3])
+    body = f"| {r['moves']:.1f} | {r['l1'][0]:.1f}-{r['l1'][1]:.1f} " if real else ""
+    return (f"| {name} | {what} {body}| {r['declared']:.2f} | {r['auto']:.2f} | {sh} ({sd}) | "
+            f"{r['d_L1']:+.1f} ({r['sd'][3]:.1f}) | {r['d_L2']:+.1f} ({r['sd'][4]:.1f}) | "
+            f"{'yes' if ok else 'no'} |")
+
+
+REAL = ["| session | motion | shoulder moves, max from its mean (cm) | abs(E − S), 5-95 % (cm) "
+        "| wrist RMSE, declared arm (cm) | wrist RMSE, auto arm (cm) | "
+        "shoulder error x, y, z (SD) cm | L1 error (SD) cm | L2 error (SD) cm | all goals |",
+        "|---|---|---|---|---|---|---|---|---|---|"]
+HEADER = ["| session | motion | wrist RMSE, declared arm (cm) | wrist RMSE, auto arm (cm) | "
+          "shoulder error x, y, z (SD) cm | L1 error (SD) cm | L2 error (SD) cm | all goals |",
+          "|---|---|---|---|---|---|---|---|"]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--out", default=str(REPO / "docs" / "validation-from-mocap.md"))
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    mocap, synthetic = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        if UE_ADL.is_dir():
+            for trial, what in TASKS.items():
+                folder = Path(tmp) / trial
+                pipeline.simulate_from_mocap(folder, UE_ADL / f"ADL001{trial}.csv",
+                                             MocapSimSettings())
+                mocap.append(row(trial, what, one(folder), real=True))
+                print(mocap[-1], file=sys.stderr)
+        for task in ("circle", "rectangle", "reach", "figure8"):
+            for seed in range(args.seeds):
+                folder = Path(tmp) / f"{task}-s{seed}"
+                pipeline.simulate(folder, ArmSimSettings(task=task, seed=seed))
+                synthetic.append(row(folder.name, task, one(folder)))
+                print(synthetic[-1], file=sys.stderr)
+        # control: the same circle with an exact IMU orientation (no gravity leak, exact axis)
+        folder = Path(tmp) / "circle-s0-exact-orientation"
+        pipeline.simulate(folder, ArmSimSettings(task="circle", seed=0,
+                                                 imu_errors={"orientation_rms_deg": 0.0}))
+        synthetic.append(row(folder.name, "circle, IMU orientation exact (control)", one(folder)))
+        print(synthetic[-1], file=sys.stderr)
+        shutil.rmtree(tmp, ignore_errors=True)
+    write(Path(args.out), mocap, synthetic, time.perf_counter() - t0, args.seeds)
+
+
+def write(out: Path, mocap: list[str], synthetic: list[str], wall: float, seeds: int) -> None:
+    lines = [
+        "# Sessions from real motion, and the arm model from the data", "",
+        f"Generated by `python validation/from_mocap.py` (part of `make validate`) in {wall:.0f} s.",
+        "`pf-constraint` (RTS-smoothed; the default method when this study was written, before "
+        "`arm-smoother`), wrist 3-D RMSE by `compare`. Goals "
+        "(issue 14): with `[arm] … = \"auto\"`, shoulder within 2 cm, lengths within 1 cm, wrist "
+        "RMSE within 20 % of the declared-model figure. SDs are the estimator's own.", "",
+        "## UE-ADL trials (`armtrack simulate --from-mocap`)", "",
+        "Subject ADL001 of the UE-ADL database (Vicon 100 Hz, MIT licence), seed 0. The errors "
+        "of the auto arm are against the arm a lab would declare (the shoulder point's mean, the "
+        "lengths' medians), which is not a sphere's centre: the shoulder point (greater "
+        "tubercle) moves and |E − S| varies within a trial (columns 3-4).", "",
+        *REAL, *(mocap or ["| (../shared/realdata/ue-adl/ not present) |||||||"]), "",
+        f"## Simulated tasks (fixed shoulder, exact arm; {seeds} seed(s) each)", "",
+        *HEADER, *synthetic, "",
+        "## Reading the tables", "",
+        "**Real motion.** The arm of Tao & Hu is a fixed sphere; a real one is not. The shoulder "
+        "point moves with the trunk and scapula and the shoulder-to-elbow distance changes by "
+        "several cm within a trial (columns 3-4: soft tissue under the clusters and a landmark "
+        "that is not a joint centre). The declared model (mean shoulder, median lengths) is then "
+        "off where the hand is far from its median pose, and where the camera ray grazes the "
+        "sphere the estimate runs along the ray. The auto arm is the sphere that best explains "
+        "this session's wrist, forearm axis and accelerations, not the landmark's mean: its "
+        "'errors' against the declared arm are large while its wrist RMSE is lower than the "
+        "declared model's on these trials. The shoulder/length goals, set against a fixed "
+        "shoulder, cannot be met by any fixed sphere here; the drifting shoulder state of the "
+        "orientation-aware smoother (issue 14, another branch) is the remedy the issue names.", "",
+        "**Simulated tasks.** The control row (exact IMU orientation) shows the estimator "
+        "meeting the shoulder and length goals on a circle, the wrist near its goal. With the "
+        "MTw-class 1° orientation error the accelerometer "
+        "reads a gravity leak of up to g·sin 1° = 0.17 m/s², the size of the tasks' own "
+        "accelerations (a 10 cm circle in 5 s: 0.16 m/s²), so the IMU cannot fix the wrist's depth "
+        "along the camera ray to better than a few cm over the slow table-top tasks, and the "
+        "sphere's centre moves with it (along the camera's line of sight, the 'SD' columns say "
+        "so). Declared tape-measured lengths (`upper_arm_m`, `forearm_m`) with `shoulder_m = "
+        "\"auto\"` remove two of the five unknowns.", ""]
+    out.write_text("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
