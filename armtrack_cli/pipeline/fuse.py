@@ -20,6 +20,7 @@ from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
 from armtrack_cli.pipeline.kinematics import kinematics_table
 from armtrack_cli.pipeline.palm import fuse_palm
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
@@ -54,6 +55,7 @@ class Prepared:
     inputs: Inputs  # per filtered frame: IMU step, detection, orientation
     projection: models.Projection
     arm: models.Arm | None
+    imu_offset: dict  # [sync] imu_offset_s: value, and its estimate and SD (imu_offset.py)
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
@@ -69,9 +71,16 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
                    field=session.imu.field)
     ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
-    t_imu = imu.t[ok] + session.offset_s("imu_offset_s")  # session time = stream time + offset
     q_imu = imu.quat[ok]
     a_w = models.accel_world(q_imu, imu.acc[ok])  # Tao & Hu eq. 4
+    arm = None
+    if session.arm is not None:
+        arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
+                         L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
+    proj = models.Projection(cam)
+    offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_imu, a_w, t_f, uv,
+                                     proj, arm)
+    t_imu = imu.t[ok] + offset  # session time = stream time + offset
     # frames inside the IMU's span, starting at the first detection
     inside = (t_f >= t_imu[0]) & (t_f <= t_imu[-1])
     det = inside & np.isfinite(uv).all(axis=1)
@@ -81,13 +90,9 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     frames = np.arange(int(np.flatnonzero(det)[0]), int(np.flatnonzero(inside)[-1]) + 1)
     steps = models.composite_steps(t_imu, a_w, t_f[frames], accel_noise=s.accel_noise,
                                    imu_period=1.0 / imu.rate_hz)
-    arm = None
-    if session.arm is not None:
-        arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
-                         L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
     return Prepared(t_f, frames, Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu,
                                                                             t_f[frames])),
-                    models.Projection(cam), arm)
+                    proj, arm, how)
 
 
 def fuse(path: str | Path, *, method: str | None = None, particles: int | None = None,
@@ -137,7 +142,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         warnings.warn(f"{dest / name}: {far.sum()} of {len(far)} frames put the wrist where no "
                       f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
-                "frames_beyond_reach": int(far.sum())}
+                "frames_beyond_reach": int(far.sum()), "imu_offset_s": p.imu_offset}
     q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
     q_WB[p.frames] = inp.q_WB
     kin = kinematics_table(table, session, q_WB=q_WB)
@@ -149,4 +154,4 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),
             "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
             "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how,
-            "frames_beyond_reach": int(far.sum())}
+            "frames_beyond_reach": int(far.sum()), "imu_offset_s": p.imu_offset}
