@@ -11,46 +11,22 @@ import numpy as np
 import pytest
 
 from armtrack_cli import pipeline
-from armtrack_cli.fuse import models
-from armtrack_cli.fuse.imu_sync import SyncProblem, estimate_imu_offset
-from armtrack_cli.simulate import imu_model, kinematics
+from armtrack_cli.fuse.imu_sync import estimate_imu_offset
 from armtrack_cli.simulate.arm_session import ArmSimSettings
-from armtrack_cli.simulate.camera import default_camera
 from tests.conftest import run_cli
-
-
-def problem(offset_s: float, *, task: str = "circle", seed: int = 0, duration: float = 20.0,
-            orientation_deg: float = 0.0) -> SyncProblem:
-    """Detections (0.5 px noise) and an IMU (MTw-class noise and bias, 100 Hz, on its own
-    clock: session time = IMU time + offset_s) from the simulator's exact arm kinematics."""
-    rng = np.random.default_rng(seed)
-    s = ArmSimSettings(task=task, duration_s=duration)
-    arm = kinematics.ArmGeometry(np.array(s.shoulder), s.upper_arm_m, s.forearm_m)
-    tk = kinematics.Task(task, duration, np.array(s.centre), s.size_m)
-    proj = models.Projection(default_camera())
-    t_f = np.arange(int(duration * 30)) / 30.0
-    uv = proj(kinematics.arm_state(arm, tk, t_f).wrist) + rng.normal(0, 0.5, (t_f.size, 2))
-    t_imu = np.arange(int((duration + 1 - offset_s) * 100)) / 100.0
-    st = kinematics.arm_state(arm, tk, t_imu + offset_s)
-    err = imu_model.orientation_error(t_imu, orientation_deg, rng)
-    q = imu_model.quat.multiply(err, st.q_WB)
-    a_W = (imu_model.quat.rotate(err, st.wrist_acc + imu_model.GRAVITY_W * -1)
-           + imu_model.GRAVITY_W + 0.03 + rng.normal(0, 0.02, (t_imu.size, 3)))
-    return SyncProblem(t_imu, a_W, q, t_f, uv, proj,
-                       models.Arm(shoulder=arm.shoulder, L1=arm.upper_arm_m, L2=arm.forearm_m,
-                                  forearm_B=np.array([0.0, 1.0, 0.0])))
+from tests.sync_cases import case
 
 
 @pytest.mark.parametrize("offset_s,task", [(-0.5, "circle"), (0.2, "figure8")])
 def test_known_offset_recovered_without_orientation_error(offset_s, task):
     """Searched over ±3 s; found within 3 SD, the SD a few frames' worth at most."""
-    off = estimate_imu_offset(problem(offset_s, task=task))
+    off = estimate_imu_offset(case(offset_s, task=task, orientation_deg=0.0))
     assert abs(off.estimate_s - offset_s) <= 3 * off.sd_s
     assert 0 < off.sd_s < 0.03
 
 
 def test_missing_detections_and_an_imu_gap():
-    p = problem(0.05, task="reach", seed=2)
+    p = case(0.05, task="reach", seed=2)
     uv = p.uv.copy()
     uv[200:230] = np.nan  # a 1 s occlusion
     uv[np.random.default_rng(1).random(uv.shape[0]) < 0.1] = np.nan  # and 10 % lost frames
@@ -63,13 +39,13 @@ def test_missing_detections_and_an_imu_gap():
 def test_sd_covers_the_error_with_orientation_error():
     """With ~1° of slowly varying orientation error (the simulator's MTw model) the estimate
     is within 3 SD of the truth."""
-    off = estimate_imu_offset(problem(-0.2, seed=4, orientation_deg=1.0))
+    off = estimate_imu_offset(case(-0.2, seed=4))
     assert abs(off.estimate_s + 0.2) <= 3 * off.sd_s
     assert off.sd_s < 0.1
 
 
 def test_too_few_detections_is_none():
-    p = problem(0.0, duration=6.0)
+    p = case(0.0, duration=6.0)
     assert estimate_imu_offset(replace(p, uv=np.full_like(p.uv, np.nan))) is None
 
 

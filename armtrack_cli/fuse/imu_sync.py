@@ -24,14 +24,19 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy.interpolate import CubicHermiteSpline
 
 from armtrack_cli.fuse import models
 
 WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
-KNOT_S = 2.0  # spacing of the drift's piecewise-linear basis (s): dense enough for the orientation error's gravity leak (0.02–0.2 Hz), sparse enough to leave the motion's timing
+KNOT_S = 2.0  # s between the drift spline's knots: the orientation error's gravity leak
+#               varies at 0.02–0.2 Hz; the motion's timing lies mostly above
+DRIFT_DEGREE = 4  # quartic: the integral of a cubic spline acceleration error
 GAP_S = 0.1  # an IMU gap longer than this is missing, not interpolated across
+BRIDGE_S = 0.1  # detections lost for at most this long are bridged for the derivative
 MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be scored
 MIN_FRAMES = 30
+REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
 
 
 @dataclass(frozen=True)
@@ -74,8 +79,8 @@ def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
 class _Prepared:
     vel_img: np.ndarray  # (n, 2) px/s, the detections' velocity (NaN = none)
     J: np.ndarray  # (n, 2, 3) px/m
-    drift: np.ndarray  # (n, m) hat functions of time, knots KNOT_S apart
-    v_imu: np.ndarray  # (M, 3) m/s, ∫ a_W dt on the IMU's clock (NaN after a long gap)
+    drift: np.ndarray  # (n, m) the drift's spline basis at the frames
+    v_imu: object  # t -> (…, 3) m/s, ∫ a_W dt on the IMU's clock: cubic Hermite (dv/dt = a_W)
     dt: float  # frame period, s
     window: int
 
@@ -84,11 +89,11 @@ def _prepare(p: SyncProblem, delta: float) -> _Prepared:
     dt = float(np.median(np.diff(p.t_frames)))
     window = max(5, int(round(WINDOW_S / dt)) | 1)
     J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
-    knots = np.arange(p.t_frames[0], p.t_frames[-1] + KNOT_S, KNOT_S)
-    drift = np.clip(1 - np.abs(p.t_frames[:, None] - knots[None, :]) / KNOT_S, 0, None)
+    drift = _spline_basis(p.t_frames)
     v_imu = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (p.a_W[1:] + p.a_W[:-1])
                                                    * np.diff(p.t_imu)[:, None], axis=0)])
-    return _Prepared(_savgol(p.uv, window, 1, dt), J, drift, v_imu, dt, window)
+    return _Prepared(_savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 1, dt), J, drift,
+                     CubicHermiteSpline(p.t_imu, v_imu, p.a_W, axis=0), dt, window)
 
 
 def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
@@ -134,6 +139,35 @@ def _jacobians(proj: models.Projection, pts: np.ndarray, h: float = 1e-5) -> np.
     return J
 
 
+def _bridge(x: np.ndarray, most: int) -> np.ndarray:
+    """x (n, d) with runs of at most ``most`` missing rows between two present ones filled
+    linearly (for the derivative only: a lost frame or two must not void a whole window);
+    longer runs stay missing."""
+    ok = np.isfinite(x).all(axis=1)
+    idx = np.flatnonzero(ok)
+    out = x.copy()
+    if idx.size < 2:
+        return out
+    i = np.arange(x.shape[0])
+    nxt = np.clip(np.searchsorted(idx, i), 0, idx.size - 1)
+    prv = np.clip(nxt - 1, 0, idx.size - 1)
+    fill = ~ok & (i > idx[0]) & (i < idx[-1]) & (idx[nxt] - idx[prv] - 1 <= most)
+    for a in range(x.shape[1]):
+        out[fill, a] = np.interp(i[fill], idx, x[idx, a])
+    return out
+
+
+def _spline_basis(t: np.ndarray) -> np.ndarray:
+    """(n, m) quartic B-splines, knots KNOT_S apart over t: the integrals of cubic splines
+    (plus a constant), i.e. the velocity drift of a smoothly varying acceleration error."""
+    from scipy.interpolate import BSpline
+
+    k = DRIFT_DEGREE
+    inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / KNOT_S)) + 1))
+    knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
+    return BSpline.design_matrix(np.clip(t, inner[0], inner[-1]), knots, k).toarray()
+
+
 def _fill(x: np.ndarray) -> np.ndarray:
     """Rows of NaN filled from the nearest row that has values (for the Jacobian only)."""
     idx = np.flatnonzero(np.isfinite(x).all(axis=1))
@@ -142,59 +176,76 @@ def _fill(x: np.ndarray) -> np.ndarray:
 
 
 def predicted(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
-    """V(δ) (n, 2) px/s: the IMU's integrated velocity at t_k − δ (linear between samples;
-    NaN outside the recording or across a gap longer than GAP_S) projected by J_k (eq. 7's
-    Jacobian: u̇ = J v exactly), smoothed as the image side is."""
+    """V(δ) (n, 2) px/s: the IMU's integrated velocity at t_k − δ (smooth in δ; NaN outside
+    the recording or across a gap longer than GAP_S) projected by J_k (eq. 7's Jacobian:
+    u̇ = J v exactly), smoothed as the image side is."""
     t = p.t_frames - delta
     j = np.clip(np.searchsorted(p.t_imu, t, side="right"), 1, p.t_imu.size - 1)
     t0, t1 = p.t_imu[j - 1], p.t_imu[j]
-    f = ((t - t0) / (t1 - t0))[:, None]
-    v = pre.v_imu[j - 1] * (1 - f) + pre.v_imu[j] * f
+    v = pre.v_imu(t)
     v[(t < p.t_imu[0]) | (t > p.t_imu[-1]) | (t1 - t0 > GAP_S)] = np.nan
     return _savgol(np.einsum("kij,kj->ki", pre.J, v), pre.window, 0, pre.dt)
 
 
-def _fit(p: SyncProblem, pre: _Prepared, delta: float):
-    """Least squares u̇_k = c V_k(δ) + J_k Σ_m θ_m B_m(t_k) (the integrated IMU's drift, a
-    piecewise-linear 3-D function of time): residuals (2 per frame used) and the frames."""
-    V = predicted(p, pre, delta)
-    ok = np.isfinite(V).all(axis=1) & np.isfinite(pre.vel_img).all(axis=1)
+def _design(pre: _Prepared, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The drift's columns D (2·n_ok, 3·m) = J_k B_m(t_k) per axis, and y = u̇ (2·n_ok,)."""
     B = pre.drift[ok]
     B = B[:, B.any(axis=0)]
     J = pre.J[ok]
-    cols = [V[ok].reshape(-1, 1)] + [(J[:, :, a, None] * B[:, None, :]).reshape(-1, B.shape[1])
-                                     for a in range(3)]
-    X = np.hstack(cols)
-    y = pre.vel_img[ok].reshape(-1)
-    theta = np.linalg.solve(X.T @ X + 1e-9 * np.eye(X.shape[1]), X.T @ y)
+    D = np.hstack([(J[:, :, a, None] * B[:, None, :]).reshape(-1, B.shape[1]) for a in range(3)])
+    return D, pre.vel_img[ok].reshape(-1)
+
+
+def _gram(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Aᵀ B by einsum: these products are small, and a threaded BLAS on a busy machine spends
+    longer waking its threads than multiplying."""
+    return np.einsum("ki,k...->i...", A, B)
+
+
+def _mask(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[np.ndarray, np.ndarray]:
+    V = predicted(p, pre, delta)
+    return V, np.isfinite(V).all(axis=1) & np.isfinite(pre.vel_img).all(axis=1)
+
+
+def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray | None = None):
+    """Least squares u̇_k = c V_k(δ) + J_k d(t_k), d the integrated IMU's drift (a smooth 3-D
+    function of time in the spline basis): residuals (n_ok, 2), parameter count, frames
+    used (``ok``: these frames, when given and all scorable)."""
+    V, usable = _mask(p, pre, delta)
+    if ok is None:
+        ok = usable
+    elif not usable[ok].all():
+        return None, 0, ok
+    D, y = _design(pre, ok)
+    X = np.hstack([V[ok].reshape(-1, 1), D])
+    theta = np.linalg.solve(_gram(X, X) + 1e-9 * np.eye(X.shape[1]), _gram(X, y))
     return (y - X @ theta).reshape(-1, 2), X.shape[1], ok
 
 
-def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict) -> float:
+def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
+         frames: np.ndarray | None = None) -> float:
     """Mean squared residual of the fit (_fit); inf with too little overlap. The drift's
     normal equations are reused while the frames used stay the same (``cache``): with
-    G = DᵀD, the residual sum is yᵀy − yᵀD G⁻¹ Dᵀy − b² / s, where s = VᵀV − VᵀD G⁻¹ DᵀV
-    and b = Vᵀy − VᵀD G⁻¹ Dᵀy (the Schur complement of the scale's column)."""
-    V = predicted(p, pre, delta)
-    ok = np.isfinite(V).all(axis=1) & np.isfinite(pre.vel_img).all(axis=1)
+    G = DᵀD = L Lᵀ, the residual sum is yᵀy − ‖L⁻¹Dᵀy‖² − b² / s, where
+    s = VᵀV − ‖L⁻¹DᵀV‖² and b = Vᵀy − (L⁻¹DᵀV)ᵀ(L⁻¹Dᵀy) (the scale's column eliminated last)."""
+    V, ok = _mask(p, pre, delta)
+    if frames is not None:  # the same frames at every δ (a refinement's), when all usable
+        if not ok[frames].all():
+            return np.inf
+        ok = frames
     n = int(ok.sum())
     if n < max(MIN_OVERLAP * n_img, MIN_FRAMES):
         return np.inf
     if cache.get("ok") is None or not np.array_equal(cache["ok"], ok):
-        B = pre.drift[ok]
-        B = B[:, B.any(axis=0)]
-        J = pre.J[ok]
-        D = np.hstack([(J[:, :, a, None] * B[:, None, :]).reshape(-1, B.shape[1])
-                       for a in range(3)])
-        y = pre.vel_img[ok].reshape(-1)
-        G = np.linalg.cholesky(D.T @ D + 1e-9 * np.eye(D.shape[1]))
-        Dy = np.linalg.solve(G, D.T @ y)
-        cache.update(ok=ok, D=D, G=G, y=y, Dy=Dy, base=float(y @ y - Dy @ Dy))
+        D, y = _design(pre, ok)
+        L = np.linalg.cholesky(_gram(D, D) + 1e-9 * np.eye(D.shape[1]))
+        Dy = np.linalg.solve(L, _gram(D, y))
+        cache.update(ok=ok, D=D, L=L, y=y, Dy=Dy, base=float(y @ y - Dy @ Dy))
     v = V[ok].reshape(-1)
-    DV = np.linalg.solve(cache["G"], cache["D"].T @ v)
+    DV = np.linalg.solve(cache["L"], _gram(cache["D"], v))
     sv = float(v @ v - DV @ DV)
     b = float(v @ cache["y"] - DV @ cache["Dy"])
-    return (cache["base"] - (b * b / sv if sv > 0 else 0.0)) / n
+    return (cache["base"] - (b * b / sv if sv > 0 and b > 0 else 0.0)) / n  # c > 0: a range
 
 
 def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: float = 3.0
@@ -217,27 +268,34 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
         return None
     d0 = float(grid[int(np.argmin(costs))])
     pre = _prepare(p, d0)  # the rays' depths with the IMU's orientation at the basin
-    res = minimize_scalar(cost, bounds=(d0 - step, d0 + step), method="bounded",
-                          args=(p, pre, n_img, {}), options={"xatol": 1e-5})
-    delta = float(res.x) if res.fun <= costs.min() else d0
-    return ImuOffset(delta, _sd(p, pre, delta), int(_fit(p, pre, delta)[2].sum()))
+    lo, hi = d0 - REFINE_FRAMES * step, d0 + REFINE_FRAMES * step
+    frames = _mask(p, pre, lo)[1] & _mask(p, pre, d0)[1] & _mask(p, pre, hi)[1]
+    cache = {}
+    c0 = cost(d0, p, pre, n_img, cache, frames)
+    res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                          args=(p, pre, n_img, cache, frames), options={"xatol": 1e-5})
+    delta = float(res.x) if res.fun <= c0 else d0
+    sd, frames = _sd(p, pre, delta)
+    return ImuOffset(delta, sd, frames)
 
 
-def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> float:
-    """From the curvature of the residual sum of squares S(δ) (profiled over c and the
-    drift): SD² = 2 σ² / S'', σ² = S / (2n − parameters), inflated by (1 + ρ)/(1 − ρ) for
-    the residuals' lag-1 autocorrelation ρ."""
-    r, n_par, ok = _fit(p, pre, delta)
+def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
+    """From the curvature of the residual sum of squares S(δ) over the same frames (profiled
+    over the scale and the drift): SD² = 2 σ² / S'', σ² = S / (2n − parameters), inflated by
+    (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ; and the frames used."""
     h = 0.5 * pre.dt
-
-    def rss(d):
-        rr, _, o = _fit(p, pre, d)
-        return float(np.sum(rr**2)) if np.array_equal(o, ok) else np.nan
-
-    curv = (rss(delta + h) - 2 * float(np.sum(r**2)) + rss(delta - h)) / h**2
-    sigma2 = float(np.sum(r**2)) / max(r.size - n_par, 1)
+    r0, n_par, ok = _fit(p, pre, delta)
+    _, ok_pm = _mask(p, pre, delta + h)
+    ok = ok & ok_pm & _mask(p, pre, delta - h)[1]
+    rss = []
+    for d in (delta - h, delta, delta + h):
+        r, n_par, _ = _fit(p, pre, d, ok)
+        rss.append(float(np.sum(r**2)))
+    curv = (rss[0] - 2 * rss[1] + rss[2]) / h**2
+    r, _, _ = _fit(p, pre, delta, ok)
+    sigma2 = rss[1] / max(r.size - n_par, 1)
     rho = float(np.mean([np.corrcoef(r[:-1, k], r[1:, k])[0, 1] for k in range(2)]))
     rho = min(max(rho, 0.0), 0.99)
     if not np.isfinite(curv) or curv <= 0:
-        return float("nan")
-    return float(np.sqrt(2 * sigma2 / curv * (1 + rho) / (1 - rho)))
+        return float("nan"), int(ok.sum())
+    return float(np.sqrt(2 * sigma2 / curv * (1 + rho) / (1 - rho))), int(ok.sum())
