@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import re
+import warnings
 from dataclasses import replace
 
 import numpy as np
@@ -38,8 +39,9 @@ def test_missing_detections_and_an_imu_gap():
 
 def test_sd_covers_the_error_with_orientation_error():
     """With ~1° of slowly varying orientation error (the simulator's MTw model) the estimate
-    is within 3 SD of the truth."""
-    off = estimate_imu_offset(case(-0.2, seed=4))
+    is within 3 SD of the truth (a figure-eight: on a slow circle the SD can be too small,
+    docs/validation-sync.md)."""
+    off = estimate_imu_offset(case(-0.2, task="figure8", seed=4))
     assert abs(off.estimate_s + 0.2) <= 3 * off.sd_s
     assert off.sd_s < 0.1
 
@@ -74,7 +76,10 @@ def test_auto_end_to_end(session):
 def test_declared_offset_wrong_by_0_2_s_warns(session):
     toml = session / "session.toml"
     toml.write_text(toml.read_text().replace('imu_offset_s = "auto"', "imu_offset_s = 0"))
-    r = run_cli("fuse", str(session))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        r = run_cli("fuse", str(session))
     assert r.exit_code == 0, r.output
-    warn = [line for line in r.stderr.splitlines() if "clock offset" in line]
-    assert len(warn) == 1 and "not the declared +0.000 s" in warn[0], r.stderr
+    warn = [str(w.message) for w in seen if "clock offset" in str(w.message)]
+    assert len(warn) == 1 and "\n" not in warn[0], warn
+    assert re.search(r"at -0\.\d{3} ± 0\.\d{3} s, not the declared \+0\.000 s", warn[0]), warn
