@@ -1,21 +1,25 @@
 """The IMU's clock offset, estimated from the data ([sync] imu_offset_s = "auto"): the δ, with
-session time = IMU time + δ, that lines the IMU's accelerations up with the wrist patch's
-image motion, and its standard deviation.
+session time = IMU time + δ, that lines the IMU's motion up with the wrist patch's image
+motion, and its standard deviation.
 
-The patch's image acceleration ü_k (a Savitzky–Golay second derivative of the detections) is
-compared with the IMU's world acceleration a_W (eq. 4) projected into the image,
-A_k(δ) = J_k a_W(t_k − δ), J_k = ∂π/∂p (eq. 7) at the point of the detection's ray at the
-first detection's range (on the arm's sphere, models.initial_wrist). Both sides are filtered
-alike by zero-phase filters (the same smoothing window, then a high-pass that removes what
-~1° of orientation error leaks of gravity, slowly varying), so the filters shift neither in
-time. Cost: the residual ü − c A(δ) with the best scale c (the range is approximate), mean
-over the frames both cover. A grid at one frame period over the search window finds the
-basin, a bounded scalar search refines it; the SD is the Gauss–Newton one,
-σ² / (c² Σ ‖∂A/∂δ‖²), inflated by (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ
-(compare/sync.py does the same for the ground truth).
+Velocities, not accelerations: the image velocity is exactly u̇ = J v (J = ∂π/∂p, eq. 7),
+while the image acceleration also holds −2 (Ż/Z) u̇, which a time shift would absorb. So the
+patch's image velocity u̇_k (a cubic Savitzky–Golay derivative of the detections) is fitted
+by c V_k(δ) + J_k d(t_k), where V_k(δ) = J_k v(t_k − δ) is the IMU's integrated world
+acceleration (eq. 4; a cubic Hermite curve through the integral, so smooth in δ) projected
+into the image and smoothed alike; c > 0 absorbs the approximate range; d is the
+integration's drift, a quartic spline with knots KNOT_S apart (the integral of a smooth
+acceleration error: ~1° of orientation error leaks up to 0.17 m/s² of gravity, varying over
+5–50 s, plus the accelerometer's bias). J_k is taken where the detection's ray meets the
+arm's sphere (eq. 15, the IMU's orientation at t_k − δ). Cost: the fit's mean squared
+residual over the frames both cover. A grid at one frame period over the search window finds
+the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
+SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
+(1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
 
-Missing detections are missing: a frame whose smoothing window lacks one has no image
-acceleration and is left out; an IMU gap longer than GAP_S leaves the frames it covers out.
+Missing detections are missing: lost runs up to BRIDGE_S are bridged for the derivative
+only, a window holding a longer loss gives no image velocity; an IMU gap longer than GAP_S
+gives no IMU velocity. Measured in docs/validation-sync.md.
 """
 
 from __future__ import annotations
