@@ -117,6 +117,9 @@ def write(out: Path, a: list[dict], b: list[dict], args) -> None:
               f"{np.mean(np.abs(err) <= 2 * sd) * 100:.0f} %. Per task, |error| RMS: "
               + ", ".join(f"{t} {np.sqrt(np.mean([r['err_ms']**2 for r in a if r['task'] == t])):.1f} ms"
                           for t in TASKS) + ".", ""]
+    if not b:
+        out.write_text("\n".join(lines) + "\n")
+        return
     lines += [f"## B. Rendered sessions through the pipeline ({args.session_duration:g} s, "
               "default method)", "",
               "| session | true δ s | auto: δ ± SD s | wrist / elbow RMSE cm, auto | "

@@ -1,7 +1,7 @@
 """The IMU's clock offset for fuse: declared in [sync] imu_offset_s and checked against the
 data, or "auto" and estimated from it (fuse/imu_sync.py). As compare does for the ground
 truth (pipeline/compare.py): the estimate, its SD, ``from: auto|declared``, and one warning
-line when a declared value disagrees with the data by more than 3 SD."""
+line when a declared value disagrees with the data by more than 3 SD (and WARN_FLOOR_S)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,8 @@ from armtrack_cli.fuse.imu_sync import SyncProblem, estimate_imu_offset
 
 AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
 CHECK_SEARCH_S = 0.5  # a declared offset is checked within ±0.5 s of itself
+WARN_FLOOR_S = 0.05  # … and warned about beyond 3 SD and beyond this: the estimator's own
+#                      error reaches ~30 ms on slow, smooth motion (docs/validation-sync.md)
 
 
 def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndarray,
@@ -40,7 +42,7 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
     info = {"value": centre, "from": "declared"}
     if off is not None and np.isfinite(off.sd_s):
         info.update(estimate=round(off.estimate_s, 4), sd=round(off.sd_s, 4))
-        if abs(off.estimate_s - centre) > 3 * off.sd_s:
+        if abs(off.estimate_s - centre) > max(3 * off.sd_s, WARN_FLOOR_S):
             warnings.warn(f"{imu_file}: the data put its clock offset at {off.estimate_s:+.3f} "
                           f"± {off.sd_s:.3f} s, not the declared {centre:+.3f} s; check [sync] "
                           "imu_offset_s", stacklevel=1)
