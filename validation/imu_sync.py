@@ -79,7 +79,7 @@ def study_b(duration: float) -> list[dict]:
                     warnings.simplefilter("always")
                     f = pipeline.fuse(folder)
                 row[how] = f["imu_offset_s"]
-                row[how + "_warned"] = [str(w.message) for w in caught
+                row[how + "_warned"] = [str(w.message).replace(tmp + "/", "") for w in caught
                                         if "clock offset" in str(w.message)]
                 if how != "wrong":
                     row[how + "_rmse"] = _rmse(pipeline.compare(folder))
@@ -130,7 +130,18 @@ def write(out: Path, a: list[dict], b: list[dict], args) -> None:
         lines.append(f"| {r['task']} seed {r['seed']} | {r['offset']:+.2f} | "
                      f"{r['auto']['value']:+.4f} ± {r['auto']['sd']:.4f} | {au[0]:.2f} / "
                      f"{au[1]:.2f} | {de[0]:.2f} / {de[1]:.2f} | {warned} |")
+    lines += ["", READING]
     out.write_text("\n".join(lines) + "\n")
+
+
+READING = (
+    "Reading. Figure-eight and reach meet the 10 ms goal on every run; the slow, smooth "
+    "circle (one lap in ~5.7 s) does not: its timing lies at the same low frequencies as "
+    "the orientation error's gravity leak, which the drift spline must absorb, and its "
+    "errors reach 25 ms with SDs of 6–9 ms (within 3 SD on 97 % of all runs). So a "
+    "declared offset is warned about beyond 3 SD *and* 50 ms (pipeline/imu_offset.py), "
+    "which a 0.2 s error always passes (B). With the offset recovered, compare's RMSE is "
+    "that of the truly declared session within 0.25 cm either way (B).")
 
 
 def main() -> None:
