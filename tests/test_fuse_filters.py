@@ -208,7 +208,8 @@ def test_one_step_equals_filterpy():
 
 
 
-@pytest.mark.parametrize("method", ["inertial", "ekf", "ukf", "pf", "pf-constraint"])
+@pytest.mark.parametrize("method", ["inertial", "ekf", "ukf", "pf", "pf-constraint",
+                                    "arm-smoother"])
 def test_kernels_load_before_a_timed_run(method):
     from armtrack_cli.fuse.methods import load_kernels
 

@@ -11,6 +11,7 @@ import numpy as np
 from armtrack_cli.filters import gaussian
 from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
+from armtrack_cli.fuse import arm_smoother
 from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.settings import FuseSettings
 
@@ -23,6 +24,8 @@ class Inputs:
     steps: Steps
     z: np.ndarray  # (n_frames, 2) px, NaN where the patch was not detected
     q_WB: np.ndarray  # (n_frames, 4)
+    t: np.ndarray | None = None  # (n_frames,) s, the frames' times (arm-smoother)
+    imu: arm_smoother.ImuSamples | None = None  # the IMU samples themselves (arm-smoother)
 
 
 @dataclass(frozen=True)
@@ -30,6 +33,9 @@ class Estimates:
     mean: np.ndarray  # (n_frames, 6) wrist position and velocity
     cov: np.ndarray  # (n_frames, 6, 6)
     ess: np.ndarray | None  # (n_frames,) particle filters only
+    q_WB: np.ndarray | None = None  # (n_frames, 4) orientation corrected by the method, if any
+    elbow_cov: np.ndarray | None = None  # (n_frames, 3, 3) where the method estimates it
+    summary: dict | None = None  # what the method adds to fuse's summary
 
     @property
     def sd(self) -> np.ndarray:
@@ -180,8 +186,17 @@ def load_kernels(method: str) -> None:
     """Load ``method``'s compiled kernel (numba's set-up and its cache, about half a second
     once per process; a compile, once per install) by running it on a two-frame problem, so
     that a caller timing ``run`` times the filter only."""
-    if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint"):
+    if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint", "arm-smoother"):
         return
+    if method == "arm-smoother":
+        from armtrack_cli.fuse.smoother_kernel import smooth as smoother_pass
+
+        d, n = 12, 2
+        e = np.tile(np.eye(d), (n, 1, 1))
+        smoother_pass(np.zeros(d), np.eye(d), e, np.zeros((n, d)), e, np.zeros((n, 2, d)),
+                      np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
+                      np.ones(n, bool), 1.0, 13.8)
+        method = "pf-constraint"
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
     z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
@@ -202,15 +217,39 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         est = run_gaussian(inp, x0, P0, proj, s, method)
     elif method == "pf":
         est = run_particles(inp, x0, P0, proj, s, arm, constrained=False)
-    elif method == "pf-constraint":
+    elif method in ("pf-constraint", "arm-smoother"):
         if arm is None:
-            raise ValueError("pf-constraint needs the arm model")
+            raise ValueError(f"{method} needs the arm model")
         est = run_particles(inp, x0, P0, proj, s, arm, constrained=True)
+        if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
+            return run_arm_smoother(inp, x0, P0, proj, s, arm,
+                                    smooth(est, inp, s, "pf-constraint").mean)
     else:
         raise ValueError(f"unknown method {method!r}")
     if s.smoother == "rts":
         est = smooth(est, inp, s, method)
     return est
+
+
+def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+                     s: FuseSettings, arm: Arm, first: np.ndarray) -> Estimates:
+    """The orientation-aware arm smoother (fuse/arm_smoother.py) from the first pass ``first``
+    (n_frames, 6); its (p, v) block as every method's, the rest in the summary."""
+    if inp.imu is None or inp.t is None:
+        raise ValueError("arm-smoother needs the IMU samples and the frame times in its inputs")
+    r = arm_smoother.run(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0, proj, s, arm)
+    th = r.x[:, arm_smoother.TH]
+    summary = {"detections_gated": int(r.gated.sum()), "smoother_iterations": r.iterations,
+               "accel_bias_m_s2": [round(float(v), 4) for v in r.x[-1, arm_smoother.BA]],
+               "orientation_error_rms_deg": round(float(np.degrees(
+                   np.sqrt(np.mean(np.sum(th**2, axis=1))))), 3)}
+    if s.shoulder == "drifting":
+        sh = r.x[:, arm_smoother.SH]
+        summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
+        summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
+            sh - arm.shoulder, axis=1).max()), 4)
+    return Estimates(r.x[:, :6], r.P[:, :6, :6], None, q_WB=r.q_WB, elbow_cov=r.elbow_cov,
+                     summary=summary)
 
 
 def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimates:
