@@ -118,7 +118,9 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
     reference, to round-off (tests/test_pf_kernel.py)."""
-    rng = np.random.default_rng(s.seed)
+    from armtrack_cli.filters import sfc64  # numba's: imported only when a particle filter runs
+
+    rng = sfc64.generator(s.seed)  # numpy's SFC64, which the kernel draws from inline
     N = s.particles
     x = rng.multivariate_normal(x0, P0, size=N)
     if compiled:
@@ -134,7 +136,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     ace = inp.steps.noise_factors()
     seen = np.isfinite(inp.z).all(axis=1)
     for k in range(n_frames):
-        eps = rng.standard_normal((N, 12))
+        eps = rng.standard_normal((N, 12 if constrained else 6))
         if k > 0:  # step 1: particle prediction from p¹ (eq. 10)
             x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
         z = inp.z[k] if seen[k] else None
@@ -167,6 +169,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
 def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
                             constrained: bool) -> Estimates:
+    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import pf_kernel
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
@@ -174,11 +177,13 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator
     cam, dist = _camera_arrays(proj)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
+    state = sfc64.get_state(rng)
     mean, cov, n_eff = pf_kernel.run(
-        _f64(x), rng, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
+        _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
         float(s.pf_resample_ess))
+    sfc64.set_state(rng, state)
     return Estimates(mean, cov, n_eff)
 
 
@@ -197,6 +202,7 @@ def load_kernels(method: str) -> None:
                       np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
                       np.ones(n, bool), 1.0, 13.8)
         method = "pf-constraint"
+    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
     z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
@@ -207,8 +213,9 @@ def load_kernels(method: str) -> None:
         gaussian_kernel.run(x0, 1e-4 * np.eye(6), z, q, d3, d3, 0.0, cam, dist, 1.0,
                             gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0)
     else:
-        pf_kernel.run(np.zeros((10, 6)), np.random.default_rng(0), z, q, d3, d3, d3, d3, cam,
-                      dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0, 1.0)
+        pf_kernel.run(np.zeros((10, 6)), sfc64.get_state(sfc64.generator(0)), z, q, d3, d3, d3,
+                      d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
+                      1.0)
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
@@ -257,9 +264,12 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimat
     (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
     through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
     to the process noise of each step."""
-    F, b, Q = inp.steps.stacked()
-    if method == "pf-constraint":
-        Q = Q + np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2)
-    Q += 1e-12 * np.eye(6)
-    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), F, b, Q)
+    walk = np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2) \
+        if method == "pf-constraint" else 0.0
+
+    def steps(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        F, b, Q = inp.steps.stacked(lo, hi)  # a block at a time: memory flat with the length
+        return F, b, Q + walk + 1e-12 * np.eye(6)
+
+    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), steps=steps)
     return Estimates(x, P, est.ess)
