@@ -70,6 +70,7 @@ validate: $(STAMP)
 	$(BIN)/python validation/path_measures.py
 	$(BIN)/python validation/detect_distractor.py
 	$(BIN)/python validation/from_mocap.py
+	$(BIN)/python validation/imu_sync.py
 
 docs: $(STAMP)
 	$(BIN)/python -c "from armtrack_cli.cli import render_reference as r; open('docs/cli.md','w').write(r())"

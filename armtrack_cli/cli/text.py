@@ -33,7 +33,18 @@ def fuse_lines(folder: str, r: dict[str, Any]) -> list[str]:
             f"detection), {r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"] + (
         [f"  initialised from {r['initialised_from']}: residual {r['init_residual_px']} px, "
          f"{r['init_residual_mm']} mm"] if "init_residual_px" in r else []) + (
-        ["  arm " + arm_estimate_line(r["arm_auto"])] if r.get("arm_auto") else [])
+        ["  arm " + arm_estimate_line(r["arm_auto"])] if r.get("arm_auto") else []) + _imu_offset(r)
+
+
+def _imu_offset(r: dict[str, Any]) -> list[str]:
+    """The IMU's clock offset: estimated ("auto") or declared and checked."""
+    o = r.get("imu_offset_s")
+    if not o:
+        return []
+    if o["from"] == "auto":
+        return [f"  IMU offset {o['value']:+.3f} ± {o['sd']:.3f} s (estimated from the data)"]
+    seen = f"; the data say {o['estimate']:+.3f} ± {o['sd']:.3f} s" if "estimate" in o else ""
+    return [f"  IMU offset {o['value']:+.3f} s (declared{seen})"]
 
 
 def compare_lines(folder: str, r: dict[str, Any]) -> list[str]:
@@ -79,6 +90,11 @@ def _imu(info) -> list[str]:
              f"          session span {_span(i['span_s'])}; dropped samples "
              f"{i['dropped_samples']} in {i['gaps']} gaps (largest {i['largest_gap_s']} s)",
              f"          orientation: {i['orientation']}; forearm axis {i['forearm_axis']}"]
+    if "offset_s" in i:
+        o = i["offset_s"]
+        lines.append("          clock offset " + (
+            f"{o['value']:+.3f} ± {o['sd']:.3f} s (auto, estimated at the last fuse)"
+            if isinstance(o, dict) else o if isinstance(o, str) else f"{o:+.3f} s (declared)"))
     lines += [f"          warning: {ch} has no data" for ch in i["empty_channels"]]
     return lines + [f"          note: {n}" for n in i["notes"]]
 

@@ -22,6 +22,7 @@ from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 from armtrack_cli.pipeline import arm_model
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
 from armtrack_cli.pipeline.kinematics import kinematics_table
 from armtrack_cli.pipeline.palm import fuse_palm
 from armtrack_cli.session.arm_file import write_arm_estimate
@@ -57,6 +58,7 @@ class Prepared:
     inputs: Inputs  # per filtered frame: IMU step, detection, orientation
     projection: models.Projection
     arm: models.Arm | None
+    imu_offset: dict  # [sync] imu_offset_s: value, and its estimate and SD (imu_offset.py)
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
@@ -72,9 +74,17 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
                    field=session.imu.field)
     ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
-    t_imu = imu.t[ok] + session.offset_s("imu_offset_s")  # session time = stream time + offset
     q_imu = imu.quat[ok]
     a_w = models.accel_world(q_imu, imu.acc[ok])  # Tao & Hu eq. 4
+    arm = None
+    if session.arm is not None:
+        arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
+                         L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
+    proj = models.Projection(cam)
+    known = arm if session.arm is None or not session.arm.auto else None  # "auto": not yet
+    offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_imu, a_w, t_f, uv,
+                                     proj, known)
+    t_imu = imu.t[ok] + offset  # session time = stream time + offset
     # frames inside the IMU's span, starting at the first detection
     inside = (t_f >= t_imu[0]) & (t_f <= t_imu[-1])
     det = inside & np.isfinite(uv).all(axis=1)
@@ -84,13 +94,9 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     frames = np.arange(int(np.flatnonzero(det)[0]), int(np.flatnonzero(inside)[-1]) + 1)
     steps = models.composite_steps(t_imu, a_w, t_f[frames], accel_noise=s.accel_noise,
                                    imu_period=1.0 / imu.rate_hz)
-    arm = None
-    if session.arm is not None:
-        arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
-                         L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
     inputs = Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu, t_f[frames]),
                     t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc[ok]))
-    return Prepared(t_f, frames, inputs, models.Projection(cam), arm)
+    return Prepared(t_f, frames, inputs, proj, arm, how)
 
 
 def fuse(path: str | Path, *, method: str | None = None, particles: int | None = None,
@@ -147,7 +153,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
                       f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
                 "frames_beyond_reach": int(far.sum()), **(est.summary or {}),
-                **({"arm_auto": auto.as_dict()} if auto else {})}
+                **({"arm_auto": auto.as_dict()} if auto else {}),
+                "imu_offset_s": p.imu_offset}
     q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
     q_WB[p.frames] = inp.q_WB if est.q_WB is None else est.q_WB
     kin = kinematics_table(table, session, q_WB=q_WB)
@@ -162,4 +169,5 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
             "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how,
             "frames_beyond_reach": int(far.sum()), **(est.summary or {}),
-            **({"arm_auto": auto.as_dict()} if auto else {})}
+            **({"arm_auto": auto.as_dict()} if auto else {}),
+            "imu_offset_s": p.imu_offset}

@@ -7,6 +7,7 @@ malformed file stops here with a clear error.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -127,6 +128,7 @@ def describe(session: Session, *, imu_rate_hz: float | None = None,
                      topic=session.imu.topic, field=session.imu.field, complete=False)
         out["imu"] = describe_imu(s, session.sync.imu_offset_s)
         out["imu"]["forearm_axis"] = session.imu.forearm_axis
+        out["imu"]["offset_s"] = imu_offset(session)
         if not out["imu"]["missing_for_fusion"]:
             have.add("imu")
     cam = session.camera
@@ -179,6 +181,25 @@ def describe(session: Session, *, imu_rate_hz: float | None = None,
         out["methods"]["compare"] = (f"needs the {missing} name(s) [groundtruth] gives that the "
                                      "files lack (listed above)")
     return out
+
+
+def imu_offset(session: Session) -> float | str | dict:
+    """[sync] imu_offset_s as declared; for "auto", the newest estimate a fuse wrote beside
+    its trajectory in the default work folder (value, SD, file), else "auto: estimated at
+    fuse". Reads the sidecars only: info runs no filter."""
+    declared = session.sync.imu_offset_s
+    if declared != "auto":
+        return declared
+    metas = sorted(session.out_dir.glob("trajectory-*.meta.json"),
+                   key=lambda m: m.stat().st_mtime) if session.out_dir.is_dir() else []
+    for meta in reversed(metas):
+        try:
+            est = json.loads(meta.read_text())["settings"]["imu_offset_s"]
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        if isinstance(est, dict) and est.get("from") == "auto":
+            return {"value": est["value"], "sd": est["sd"], "from": "auto", "file": str(meta)}
+    return "auto: estimated at fuse"
 
 
 def readiness(session: Session, have: set[str], lacks: dict[str, str] | None = None

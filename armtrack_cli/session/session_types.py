@@ -114,10 +114,12 @@ class Session:
 
     def offset_s(self, key: str) -> float:
         """[sync] ``key`` (imu_offset_s or groundtruth_offset_s) in seconds: session time =
-        stream time + offset. "auto" (estimating it from the data) is refused until built."""
+        stream time + offset. "auto" is estimated from the data by the stage that uses the
+        stream (fuse for the IMU, compare for the ground truth), never here."""
         value = getattr(self.sync, key)
         if isinstance(value, str):
-            raise ConfigError(self.toml_path, f'[sync] {key} = "auto" is not supported yet',
+            raise ConfigError(self.toml_path, f'[sync] {key} = "auto" has no value until '
+                              "estimated from the data",
                               "write the offset in seconds (session time = stream time + offset)")
         return value
 

@@ -148,8 +148,8 @@ ARM_CASES = [
                                          "groundtruth_offset_s = inf"), TOML, "groundtruth_offset"),
     ("toml-nan-to-world", COMPARE, replace(TOML, "[[0,-1,0,0.62]", "[[0,-1,0,nan]"), TOML,
      "to_world"),
-    ("toml-auto-offset", FUSE, replace(TOML, "imu_offset_s = -1", 'imu_offset_s = "auto"'), TOML,
-     '"auto"'),
+    ("toml-misspelt-auto-offset", FUSE, replace(TOML, "imu_offset_s = -1",
+                                                'imu_offset_s = "automatic"'), TOML, '"auto"'),
     ("toml-binary", FUSE, write(TOML, GARBAGE), TOML, "not a text file"),
     # --- the video, as detect and calibrate meet it
     ("video-truncated", DETECT, truncate("video.mp4", 0.4), "video.mp4", "file is complete"),

@@ -1,0 +1,305 @@
+"""The IMU's clock offset, estimated from the data ([sync] imu_offset_s = "auto"): the δ, with
+session time = IMU time + δ, that lines the IMU's motion up with the wrist patch's image
+motion, and its standard deviation.
+
+Velocities, not accelerations: the image velocity is exactly u̇ = J v (J = ∂π/∂p, eq. 7),
+while the image acceleration also holds −2 (Ż/Z) u̇, which a time shift would absorb. So the
+patch's image velocity u̇_k (a cubic Savitzky–Golay derivative of the detections) is fitted
+by c V_k(δ) + J_k d(t_k), where V_k(δ) = J_k v(t_k − δ) is the IMU's integrated world
+acceleration (eq. 4; a cubic Hermite curve through the integral, so smooth in δ) projected
+into the image and smoothed alike; c > 0 absorbs the approximate range; d is the
+integration's drift, a quartic spline with knots KNOT_S apart (the integral of a smooth
+acceleration error: ~1° of orientation error leaks up to 0.17 m/s² of gravity, varying over
+5–50 s, plus the accelerometer's bias). J_k is taken where the detection's ray meets the
+arm's sphere (eq. 15, the IMU's orientation at t_k − δ). Cost: the fit's mean squared
+residual over the frames both cover. A grid at one frame period over the search window finds
+the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
+SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
+(1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
+
+Missing detections are missing: lost runs up to BRIDGE_S are bridged for the derivative
+only, a window holding a longer loss gives no image velocity; an IMU gap longer than GAP_S
+gives no IMU velocity. Measured in docs/validation-sync.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline
+
+from armtrack_cli.fuse import models
+
+WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
+KNOT_S = 2.0  # s between the drift spline's knots: the orientation error's gravity leak
+#               varies at 0.02–0.2 Hz; the motion's timing lies mostly above
+DRIFT_DEGREE = 4  # quartic: the integral of a cubic spline acceleration error
+GAP_S = 0.1  # an IMU gap longer than this is missing, not interpolated across
+BRIDGE_S = 0.1  # detections lost for at most this long are bridged for the derivative
+MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be scored
+MIN_FRAMES = 30
+REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
+
+
+@dataclass(frozen=True)
+class ImuOffset:
+    estimate_s: float  # δ: session time = IMU time + δ
+    sd_s: float
+    frames: int  # frames scored at the estimate
+
+
+@dataclass(frozen=True)
+class SyncProblem:
+    """The IMU on its own clock and the camera on the session clock."""
+
+    t_imu: np.ndarray  # (M,) s, IMU clock, valid samples only
+    a_W: np.ndarray  # (M, 3) m/s², gravity removed (eq. 4)
+    q_WB: np.ndarray  # (M, 4), (w, x, y, z) B into W
+    t_frames: np.ndarray  # (n,) s, session clock
+    uv: np.ndarray  # (n, 2) px, NaN = no detection
+    proj: models.Projection
+    arm: models.Arm | None
+
+
+def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
+    """Cubic Savitzky–Golay along axis 0 (odd ``window``); NaN wherever the window holds a NaN
+    or runs off either end."""
+    from scipy.signal import savgol_coeffs
+
+    c = savgol_coeffs(window, 3, deriv=deriv, delta=dt, use="dot")
+    h = window // 2
+    out = np.full(x.shape, np.nan)
+    if x.shape[0] < window:
+        return out
+    idx = np.arange(h, x.shape[0] - h)
+    stack = np.stack([x[idx - h + j] for j in range(window)], axis=0)  # (window, m, d)
+    out[idx] = np.tensordot(c, stack, axes=(0, 0))
+    return out
+
+
+@dataclass(frozen=True)
+class _Prepared:
+    vel_img: np.ndarray  # (n, 2) px/s, the detections' velocity (NaN = none)
+    J: np.ndarray  # (n, 2, 3) px/m
+    drift: np.ndarray  # (n, m) the drift's spline basis at the frames
+    v_imu: object  # t -> (…, 3) m/s, ∫ a_W dt on the IMU's clock: cubic Hermite (dv/dt = a_W)
+    dt: float  # frame period, s
+    window: int
+
+
+def _prepare(p: SyncProblem, delta: float) -> _Prepared:
+    dt = float(np.median(np.diff(p.t_frames)))
+    window = max(5, int(round(WINDOW_S / dt)) | 1)
+    J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
+    drift = _spline_basis(p.t_frames)
+    v_imu = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (p.a_W[1:] + p.a_W[:-1])
+                                                   * np.diff(p.t_imu)[:, None], axis=0)])
+    return _Prepared(_savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 1, dt), J, drift,
+                     CubicHermiteSpline(p.t_imu, v_imu, p.a_W, axis=0), dt, window)
+
+
+def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
+    """(n, 3) m: each detection's ray where it meets the arm's sphere |p − (S + L2 R u)| = L1
+    (eq. 15; the IMU's orientation at t − δ), the intersection nearer the previous frame's
+    (the first: models.initial_wrist's), the ray's nearest point where it misses; without an
+    arm, at the range of the first detection's start. NaN without a detection."""
+    from armtrack_cli.core import quaternion as quat
+
+    det = np.flatnonzero(np.isfinite(p.uv).all(axis=1))
+    q = quat.interpolate(p.t_imu + delta, p.q_WB, p.t_frames[det])
+    q[~np.isfinite(q).all(axis=1)] = p.q_WB[0]
+    x0, _ = models.initial_wrist(p.proj, p.uv[det[0]], arm=p.arm, q_WB=q[0],
+                                 plane_height_m=0.07)
+    c = p.proj.eye
+    n = cv2.undistortPoints(p.uv[det].reshape(-1, 1, 2), p.proj.K, p.proj.cam.dist).reshape(-1, 2)
+    d = np.hstack([n, np.ones((n.shape[0], 1))]) @ p.proj.R  # R_WCᵀ (x, y, 1): rays in W
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    out = np.full((p.uv.shape[0], 3), np.nan)
+    if p.arm is None:
+        out[det] = c + np.linalg.norm(x0 - c) * d
+        return out
+    oc = c - p.arm.sphere_centres(q)
+    bq = np.einsum("ij,ij->i", d, oc)
+    disc = bq * bq - (np.einsum("ij,ij->i", oc, oc) - p.arm.L1**2)
+    root = np.sqrt(np.maximum(disc, 0.0))
+    near, far = -bq - root, -bq + root
+    prev = np.linalg.norm(x0 - c)
+    for i in range(det.size):
+        s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]
+        out[det[i]] = c + s * d[i]
+        prev = s
+    return out
+
+
+def _jacobians(proj: models.Projection, pts: np.ndarray, h: float = 1e-5) -> np.ndarray:
+    """∂π/∂p (n, 2, 3) px/m at each point (eq. 7), by central differences."""
+    J = np.empty((pts.shape[0], 2, 3))
+    for a in range(3):
+        e = np.zeros(3)
+        e[a] = h
+        J[:, :, a] = (proj(pts + e) - proj(pts - e)) / (2 * h)
+    return J
+
+
+def _bridge(x: np.ndarray, most: int) -> np.ndarray:
+    """x (n, d) with runs of at most ``most`` missing rows between two present ones filled
+    linearly (for the derivative only: a lost frame or two must not void a whole window);
+    longer runs stay missing."""
+    ok = np.isfinite(x).all(axis=1)
+    idx = np.flatnonzero(ok)
+    out = x.copy()
+    if idx.size < 2:
+        return out
+    i = np.arange(x.shape[0])
+    nxt = np.clip(np.searchsorted(idx, i), 0, idx.size - 1)
+    prv = np.clip(nxt - 1, 0, idx.size - 1)
+    fill = ~ok & (i > idx[0]) & (i < idx[-1]) & (idx[nxt] - idx[prv] - 1 <= most)
+    for a in range(x.shape[1]):
+        out[fill, a] = np.interp(i[fill], idx, x[idx, a])
+    return out
+
+
+def _spline_basis(t: np.ndarray) -> np.ndarray:
+    """(n, m) quartic B-splines, knots KNOT_S apart over t: the integrals of cubic splines
+    (plus a constant), i.e. the velocity drift of a smoothly varying acceleration error."""
+    from scipy.interpolate import BSpline
+
+    k = DRIFT_DEGREE
+    inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / KNOT_S)) + 1))
+    knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
+    return BSpline.design_matrix(np.clip(t, inner[0], inner[-1]), knots, k).toarray()
+
+
+def _fill(x: np.ndarray) -> np.ndarray:
+    """Rows of NaN filled from the nearest row that has values (for the Jacobian only)."""
+    idx = np.flatnonzero(np.isfinite(x).all(axis=1))
+    near = idx[np.clip(np.searchsorted(idx, np.arange(x.shape[0])), 0, idx.size - 1)]
+    return x[near]
+
+
+def predicted(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
+    """V(δ) (n, 2) px/s: the IMU's integrated velocity at t_k − δ (smooth in δ; NaN outside
+    the recording or across a gap longer than GAP_S) projected by J_k (eq. 7's Jacobian:
+    u̇ = J v exactly), smoothed as the image side is."""
+    t = p.t_frames - delta
+    j = np.clip(np.searchsorted(p.t_imu, t, side="right"), 1, p.t_imu.size - 1)
+    t0, t1 = p.t_imu[j - 1], p.t_imu[j]
+    v = pre.v_imu(t)
+    v[(t < p.t_imu[0]) | (t > p.t_imu[-1]) | (t1 - t0 > GAP_S)] = np.nan
+    return _savgol(np.einsum("kij,kj->ki", pre.J, v), pre.window, 0, pre.dt)
+
+
+def _design(pre: _Prepared, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The drift's columns D (2·n_ok, 3·m) = J_k B_m(t_k) per axis, and y = u̇ (2·n_ok,)."""
+    B = pre.drift[ok]
+    B = B[:, B.any(axis=0)]
+    J = pre.J[ok]
+    D = np.hstack([(J[:, :, a, None] * B[:, None, :]).reshape(-1, B.shape[1]) for a in range(3)])
+    return D, pre.vel_img[ok].reshape(-1)
+
+
+def _gram(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Aᵀ B by einsum: these products are small, and a threaded BLAS on a busy machine spends
+    longer waking its threads than multiplying."""
+    return np.einsum("ki,k...->i...", A, B)
+
+
+def _mask(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[np.ndarray, np.ndarray]:
+    V = predicted(p, pre, delta)
+    return V, np.isfinite(V).all(axis=1) & np.isfinite(pre.vel_img).all(axis=1)
+
+
+def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray | None = None):
+    """Least squares u̇_k = c V_k(δ) + J_k d(t_k), d the integrated IMU's drift (a smooth 3-D
+    function of time in the spline basis): residuals (n_ok, 2), parameter count, frames
+    used (``ok``: these frames, when given and all scorable)."""
+    V, usable = _mask(p, pre, delta)
+    if ok is None:
+        ok = usable
+    elif not usable[ok].all():
+        return None, 0, ok
+    D, y = _design(pre, ok)
+    X = np.hstack([V[ok].reshape(-1, 1), D])
+    theta = np.linalg.solve(_gram(X, X) + 1e-9 * np.eye(X.shape[1]), _gram(X, y))
+    return (y - X @ theta).reshape(-1, 2), X.shape[1], ok
+
+
+def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
+         frames: np.ndarray | None = None) -> float:
+    """Mean squared residual of the fit (_fit); inf with too little overlap. The drift's
+    normal equations are reused while the frames used stay the same (``cache``): with
+    G = DᵀD = L Lᵀ, the residual sum is yᵀy − ‖L⁻¹Dᵀy‖² − b² / s, where
+    s = VᵀV − ‖L⁻¹DᵀV‖² and b = Vᵀy − (L⁻¹DᵀV)ᵀ(L⁻¹Dᵀy) (the scale's column eliminated last)."""
+    V, ok = _mask(p, pre, delta)
+    if frames is not None:  # the same frames at every δ (a refinement's), when all usable
+        if not ok[frames].all():
+            return np.inf
+        ok = frames
+    n = int(ok.sum())
+    if n < max(MIN_OVERLAP * n_img, MIN_FRAMES):
+        return np.inf
+    if cache.get("ok") is None or not np.array_equal(cache["ok"], ok):
+        D, y = _design(pre, ok)
+        L = np.linalg.cholesky(_gram(D, D) + 1e-9 * np.eye(D.shape[1]))
+        Dy = np.linalg.solve(L, _gram(D, y))
+        cache.update(ok=ok, D=D, L=L, y=y, Dy=Dy, base=float(y @ y - Dy @ Dy))
+    v = V[ok].reshape(-1)
+    DV = np.linalg.solve(cache["L"], _gram(cache["D"], v))
+    sv = float(v @ v - DV @ DV)
+    b = float(v @ cache["y"] - DV @ cache["Dy"])
+    return (cache["base"] - (b * b / sv if sv > 0 and b > 0 else 0.0)) / n  # c > 0: a range
+
+
+def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: float = 3.0
+                        ) -> ImuOffset | None:
+    """δ minimising the cost in centre_s ± search_s, and its SD; None when no δ there gives
+    enough frames with both an image and an IMU velocity."""
+    from scipy.optimize import minimize_scalar
+
+    if np.isfinite(p.uv).all(axis=1).sum() < MIN_FRAMES:
+        return None
+    pre = _prepare(p, centre_s)
+    n_img = int(np.isfinite(pre.vel_img).all(axis=1).sum())
+    if n_img < MIN_FRAMES:
+        return None
+    step = pre.dt
+    grid = centre_s + np.arange(-search_s, search_s + step / 2, step)
+    cache: dict = {}
+    costs = np.array([cost(d, p, pre, n_img, cache) for d in grid])
+    if not np.isfinite(costs).any():
+        return None
+    d0 = float(grid[int(np.argmin(costs))])
+    pre = _prepare(p, d0)  # the rays' depths with the IMU's orientation at the basin
+    lo, hi = d0 - REFINE_FRAMES * step, d0 + REFINE_FRAMES * step
+    frames = _mask(p, pre, lo)[1] & _mask(p, pre, d0)[1] & _mask(p, pre, hi)[1]
+    cache = {}
+    c0 = cost(d0, p, pre, n_img, cache, frames)
+    res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                          args=(p, pre, n_img, cache, frames), options={"xatol": 1e-5})
+    delta = float(res.x) if res.fun <= c0 else d0
+    sd, frames = _sd(p, pre, delta)
+    return ImuOffset(delta, sd, frames)
+
+
+def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
+    """From the curvature of the residual sum of squares S(δ) over the same frames (profiled
+    over the scale and the drift): SD² = 2 σ² / S'', σ² = S / (2n − parameters), inflated by
+    (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ; and the frames used."""
+    h = 0.5 * pre.dt
+    r0, n_par, ok = _fit(p, pre, delta)
+    _, ok_pm = _mask(p, pre, delta + h)
+    ok = ok & ok_pm & _mask(p, pre, delta - h)[1]
+    rss = []
+    for d in (delta - h, delta, delta + h):
+        r, n_par, _ = _fit(p, pre, d, ok)
+        rss.append(float(np.sum(r**2)))
+    curv = (rss[0] - 2 * rss[1] + rss[2]) / h**2
+    r, _, _ = _fit(p, pre, delta, ok)
+    sigma2 = rss[1] / max(r.size - n_par, 1)
+    rho = float(np.mean([np.corrcoef(r[:-1, k], r[1:, k])[0, 1] for k in range(2)]))
+    rho = min(max(rho, 0.0), 0.99)
+    if not np.isfinite(curv) or curv <= 0:
+        return float("nan"), int(ok.sum())
+    return float(np.sqrt(2 * sigma2 / curv * (1 + rho) / (1 - rho))), int(ok.sum())

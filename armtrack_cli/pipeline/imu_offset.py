@@ -1,0 +1,49 @@
+"""The IMU's clock offset for fuse: declared in [sync] imu_offset_s and checked against the
+data, or "auto" and estimated from it (fuse/imu_sync.py). As compare does for the ground
+truth (pipeline/compare.py): the estimate, its SD, ``from: auto|declared``, and one warning
+line when a declared value disagrees with the data by more than 3 SD (and WARN_FLOOR_S)."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core.errors import DataError
+from armtrack_cli.fuse import models
+from armtrack_cli.fuse.imu_sync import SyncProblem, estimate_imu_offset
+
+AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
+CHECK_SEARCH_S = 0.5  # a declared offset is checked within ±0.5 s of itself
+WARN_FLOOR_S = 0.05  # … and warned about beyond 3 SD and beyond this: the estimator's own
+#                      error reaches ~30 ms on slow, smooth motion (docs/validation-sync.md)
+
+
+def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndarray,
+                       a_W: np.ndarray, t_frames: np.ndarray, uv: np.ndarray,
+                       proj: models.Projection, arm: models.Arm | None
+                       ) -> tuple[float, dict]:
+    """The offset to use (s; session time = IMU time + offset) and how it was set.
+    t_imu, q_WB, a_W: the IMU's valid samples on its own clock; t_frames, uv: the
+    detections on the session clock (NaN = none)."""
+    declared = session.sync.imu_offset_s != "auto"
+    centre = float(session.sync.imu_offset_s) if declared else 0.0
+    problem = SyncProblem(t_imu, a_W, q_WB, t_frames, uv, proj, arm)
+    off = estimate_imu_offset(problem, centre_s=centre,
+                              search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S)
+    if not declared:
+        if off is None or not np.isfinite(off.sd_s):
+            raise DataError(imu_file, "its clock offset cannot be estimated: within "
+                            f"±{AUTO_SEARCH_S:g} s too few frames with a detection meet the "
+                            "IMU's recording", "declare [sync] imu_offset_s in seconds")
+        return off.estimate_s, {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4),
+                                "from": "auto", "frames": off.frames}
+    info = {"value": centre, "from": "declared"}
+    if off is not None and np.isfinite(off.sd_s):
+        info.update(estimate=round(off.estimate_s, 4), sd=round(off.sd_s, 4))
+        if abs(off.estimate_s - centre) > max(3 * off.sd_s, WARN_FLOOR_S):
+            warnings.warn(f"{imu_file}: the data put its clock offset at {off.estimate_s:+.3f} "
+                          f"± {off.sd_s:.3f} s, not the declared {centre:+.3f} s; check [sync] "
+                          "imu_offset_s", stacklevel=1)
+    return centre, info

@@ -1,0 +1,86 @@
+"""[sync] imu_offset_s = "auto": the estimator (fuse/imu_sync.py) against simulated truth, and
+fuse's use of it through the CLI (auto end to end; a declared offset 0.2 s off warns)."""
+
+from __future__ import annotations
+
+import json
+import re
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armtrack_cli import pipeline
+from armtrack_cli.fuse.imu_sync import estimate_imu_offset
+from armtrack_cli.simulate.arm_session import ArmSimSettings
+from tests.conftest import run_cli
+from tests.sync_cases import case
+
+
+@pytest.mark.parametrize("offset_s,task", [(-0.5, "circle"), (0.2, "figure8")])
+def test_known_offset_recovered_without_orientation_error(offset_s, task):
+    """Searched over ±3 s; found within 3 SD, the SD a few frames' worth at most."""
+    off = estimate_imu_offset(case(offset_s, task=task, orientation_deg=0.0))
+    assert abs(off.estimate_s - offset_s) <= 3 * off.sd_s
+    assert 0 < off.sd_s < 0.03
+
+
+def test_missing_detections_and_an_imu_gap():
+    p = case(0.05, task="reach", seed=2)
+    uv = p.uv.copy()
+    uv[200:230] = np.nan  # a 1 s occlusion
+    uv[np.random.default_rng(1).random(uv.shape[0]) < 0.1] = np.nan  # and 10 % lost frames
+    keep = (p.t_imu < 8.0) | (p.t_imu > 8.5)  # a 0.5 s IMU gap
+    p = replace(p, uv=uv, t_imu=p.t_imu[keep], a_W=p.a_W[keep], q_WB=p.q_WB[keep])
+    off = estimate_imu_offset(p)
+    assert abs(off.estimate_s - 0.05) <= 3 * off.sd_s and off.sd_s < 0.05
+
+
+def test_sd_covers_the_error_with_orientation_error():
+    """With ~1° of slowly varying orientation error (the simulator's MTw model) the estimate
+    is within 3 SD of the truth (a figure-eight: on a slow circle the SD can be too small,
+    docs/validation-sync.md)."""
+    off = estimate_imu_offset(case(-0.2, task="figure8", seed=4))
+    assert abs(off.estimate_s + 0.2) <= 3 * off.sd_s
+    assert off.sd_s < 0.1
+
+
+def test_too_few_detections_is_none():
+    p = case(0.0, duration=6.0)
+    assert estimate_imu_offset(replace(p, uv=np.full_like(p.uv, np.nan))) is None
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory):
+    root = tmp_path_factory.mktemp("sync") / "s"
+    pipeline.simulate(root, ArmSimSettings(task="figure8", duration_s=12.0, seed=5,
+                                           imu_offset_s=-0.2, declare_imu_offset=False))
+    pipeline.calibrate(root)
+    pipeline.detect(root)
+    return root
+
+
+def test_auto_end_to_end(session):
+    r = run_cli("fuse", str(session), "--json")
+    assert r.exit_code == 0, r.output
+    got = json.loads(r.stdout)
+    meta = json.loads(Path(got["trajectory"]).with_suffix(".meta.json").read_text())
+    off = meta["settings"]["imu_offset_s"]
+    assert off["from"] == "auto" and got["imu_offset_s"] == off
+    assert abs(off["value"] + 0.2) <= max(3 * off["sd"], 0.02)
+    info = run_cli("info", str(session))
+    assert re.search(r"clock offset -0\.\d{3} ± 0\.\d{3} s \(auto", info.output)
+
+
+def test_declared_offset_wrong_by_0_2_s_warns(session):
+    toml = session / "session.toml"
+    toml.write_text(toml.read_text().replace('imu_offset_s = "auto"', "imu_offset_s = 0"))
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        r = run_cli("fuse", str(session))
+    assert r.exit_code == 0, r.output
+    warn = [str(w.message) for w in seen if "clock offset" in str(w.message)]
+    assert len(warn) == 1 and "\n" not in warn[0], warn
+    assert re.search(r"at -0\.\d{3} ± 0\.\d{3} s, not the declared \+0\.000 s", warn[0]), warn
