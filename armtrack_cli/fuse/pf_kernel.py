@@ -192,26 +192,103 @@ def _walk_and_constrain(x, walk_eps, walk, centre, L1, inv2c2, lw):
 
 
 @njit(cache=True)
+def _pixel_mahalanobis2(x, w, z, cam, dist, r2):
+    """robust.pixel_mahalanobis2: νᵀ S⁻¹ ν with ẑ = Σ wᵢ π(pᵢ), ν = z − ẑ,
+    S = Σ wᵢ (π(pᵢ) − ẑ)(π(pᵢ) − ẑ)ᵀ + r2 I."""
+    n = x.shape[0]
+    px = np.empty((n, 2))
+    mu, mv = 0.0, 0.0
+    for i in range(n):
+        px[i, 0], px[i, 1] = _pixel(x[i, 0], x[i, 1], x[i, 2], cam, dist)
+        mu += w[i] * px[i, 0]
+        mv += w[i] * px[i, 1]
+    suu, suv, svv = r2, 0.0, r2
+    for i in range(n):
+        du, dv = px[i, 0] - mu, px[i, 1] - mv
+        suu += w[i] * du * du
+        suv += w[i] * du * dv
+        svv += w[i] * dv * dv
+    a, b = z[0] - mu, z[1] - mv
+    return (a * (svv * a - suv * b) + b * (suu * b - suv * a)) / (suu * svv - suv * suv)
+
+
+@njit(cache=True)
+def _reseed(x, w_prior, points, n_seed, sigma, prior_m, rng):
+    """robust.branch_split and robust.reseed: particles 0..n0−1 onto points[0], the rest of
+    the n_seed onto points[1], ± sigma; n0 from the predicted cloud's density at the two."""
+    m = np.empty(6)
+    c = np.empty((6, 6))
+    _moments(x, w_prior, m, c)
+    C = c[:3, :3] + prior_m**2 * np.eye(3)
+    q = np.empty(2)
+    for b in range(2):
+        d = points[b] - m[:3]
+        q[b] = d @ np.linalg.solve(C, d)
+    p0 = 1.0 / (1.0 + np.exp(min(0.5 * (q[0] - q[1]), 700.0)))
+    n0 = int(np.floor(n_seed * p0 + 0.5))
+    for i in range(n_seed):
+        b = 0 if i < n0 else 1
+        for j in range(3):
+            x[i, j] = points[b, j] + sigma * rng.standard_normal()
+
+
+@njit(cache=True)
+def _colour_loglik(x, z, inv2s2, cam, dist, w_prior, lw):
+    """lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11), as in _predict_and_weigh."""
+    for i in range(x.shape[0]):
+        u, v = _pixel(x[i, 0], x[i, 1], x[i, 2], cam, dist)
+        eu, ev = u - z[0], v - z[1]
+        lw[i] = -inv2s2 * (eu * eu + ev * ev) + np.log(w_prior[i])
+
+
+@njit(cache=True)
+def _gate_code(d2, limit, run_gated, reacquire):
+    """robust.gate: (code, gated run) — 1 used, 2 gated, 3 re-acquired."""
+    if d2 <= limit:
+        return 1, 0
+    if run_gated < reacquire:
+        return 2, run_gated + 1
+    return 3, 0
+
+
+@njit(cache=True)
 def run(x, rng, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
-        constrained, scheme, resample_ess):
+        constrained, scheme, resample_ess, guard):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
-    (eqs. 12-14). x (N, 6) the initial particles (overwritten); returns mean (n_frames, 6),
-    cov (n_frames, 6, 6), ess (n_frames,)."""
+    (eqs. 12-14). x (N, 6) the initial particles (overwritten); ``guard`` = (points
+    (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m): the
+    gate and the re-seeding of fuse/robust.py. Returns mean (n_frames, 6), cov
+    (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
+    points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m = guard
     n_frames, N = z.shape[0], x.shape[0]
     mean = np.empty((n_frames, 6))
     cov = np.empty((n_frames, 6, 6))
     n_eff = np.empty(n_frames)
+    codes = np.zeros(n_frames, np.int8)
     w = np.full(N, 1.0 / N)
+    w_prior = np.empty(N)
     lw = np.empty(N)
     walk_eps = np.empty((N, 6))
     idx = np.empty(N, np.int64)
     xr = np.empty_like(x)
     uniform = True  # every w_i is exactly 1/N
+    limit = gate if gate > 0 else np.inf
+    run_gated = 0
     for k in range(n_frames):
         seen = _predict_and_weigh(x, rng, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
                                   uniform, walk_eps, lw)
+        if seen:  # the χ² gate
+            codes[k], run_gated = _gate_code(_pixel_mahalanobis2(x, w, z[k], cam, dist, r2),
+                                             limit, run_gated, reacquire)
+            seen = codes[k] != 2
         if seen:
+            w_prior[:] = w
             _normalise(lw, w)
+            if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / (w @ w) < reseed_ess * N):
+                _reseed(x, w_prior, points[k], n_seed, reseed_sigma, prior_m, rng)
+                codes[k] = 4 if codes[k] == 1 else codes[k]
+                _colour_loglik(x, z[k], inv2s2, cam, dist, w_prior, lw)
+                _normalise(lw, w)
             uniform = False
         n_eff[k] = 1.0 / (w @ w)
         if constrained:
@@ -232,4 +309,4 @@ def run(x, rng, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1
         x, xr = xr, x
         w[:] = 1.0 / N
         uniform = True
-    return mean, cov, n_eff
+    return mean, cov, n_eff, codes
