@@ -215,19 +215,22 @@ def run(x0, P0, z, dt, dp, dv, q, cam, dist, r2, method, Wm, Wc, scale, gate, re
             x, xo, P, Po = xo, x, Po, P
         if method > 0 and np.isfinite(z[k, 0]) and np.isfinite(z[k, 1]):
             codes[k] = 1
-            if _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po,
-                       limit) > limit:
-                if run_gated < reacquire:
-                    codes[k] = 2
-                    run_gated += 1
-                else:
-                    codes[k] = 3
-                    for a in range(6):
-                        P[a, a] += infl[a]
-                    _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po,
-                            np.inf)
-            if codes[k] != 2:
+            if run_gated < 0:  # the grace after a re-acquisition (robust.gate)
+                _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po, np.inf)
+                run_gated += 1
+            elif _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po,
+                         limit) <= limit:
                 run_gated = 0
+            elif run_gated < reacquire:
+                codes[k] = 2
+                run_gated += 1
+            else:
+                codes[k] = 3
+                run_gated = -reacquire
+                for a in range(6):
+                    P[a, a] += infl[a]
+                _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po, np.inf)
+            if codes[k] != 2:
                 x, xo, P, Po = xo, x, Po, P
         mean[k] = x
         cov[k] = P

@@ -107,7 +107,7 @@ def _run_gaussian_compiled(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Pr
     mean, cov, codes = gaussian_kernel.run(
         _f64(x0), _f64(P0), _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), float(st.q),
         cam, dist, float(s.pixel_sigma**2), gaussian_kernel.METHODS[method], sp.Wm, sp.Wc,
-        float(sp.n + sp.lam), float(s.gate_chi2), int(s.reacquire_frames),
+            float(sp.n + sp.lam), float(s.gate_chi2), int(s.reacquire_frames),
         _reacquire_inflation(s))
     return Estimates(mean, cov, None, codes)
 
@@ -159,6 +159,10 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             codes[k], run_gated = robust.gate(
                 robust.pixel_mahalanobis2(px, w, inp.z[k], s.pixel_sigma**2), s.gate_chi2,
                 run_gated, s.reacquire_frames)
+            if codes[k] == robust.REACQUIRED:
+                robust.roughen(x, s.reacquire_sigma_m, s.init_vel_sigma_m_s,
+                               rng.standard_normal((N, 6)))
+                px = proj(x[:, :3])
             if codes[k] != robust.GATED:
                 w = _colour_layer(x, px, w, inp.z[k], points[k], codes, k, proj, s, rng,
                                   constrained)
@@ -229,7 +233,8 @@ def _guard(s: FuseSettings, points: np.ndarray) -> tuple:
     """The kernel's gate and re-seeding arguments (pf_kernel.run)."""
     return (_f64(points), float(s.pixel_sigma**2), float(s.gate_chi2), int(s.reacquire_frames),
             int(np.floor(s.reseed_share * s.particles + 0.5)), float(s.reseed_ess),
-            float(s.reseed_sigma_m), float(s.reseed_prior_m))
+            float(s.reseed_sigma_m), float(s.reseed_prior_m),
+            np.r_[np.full(3, s.reacquire_sigma_m), np.full(3, s.init_vel_sigma_m_s)])
 
 
 def load_kernels(method: str) -> None:

@@ -243,12 +243,22 @@ def _colour_loglik(x, z, inv2s2, cam, dist, w_prior, lw):
 
 @njit(cache=True)
 def _gate_code(d2, limit, run_gated, reacquire):
-    """robust.gate: (code, gated run) — 1 used, 2 gated, 3 re-acquired."""
+    """robust.gate: (code, run) — 1 used, 2 gated, 3 re-acquired (then a grace, run < 0)."""
+    if run_gated < 0:
+        return 1, run_gated + 1
     if d2 <= limit:
         return 1, 0
     if run_gated < reacquire:
         return 2, run_gated + 1
-    return 3, 0
+    return 3, -reacquire
+
+
+@njit(cache=True)
+def _roughen(x, sd, rng):
+    """robust.roughen: x_ij ± sd_j for every particle (the re-acquisition's spread)."""
+    for i in range(x.shape[0]):
+        for j in range(6):
+            x[i, j] += sd[j] * rng.standard_normal()
 
 
 @njit(cache=True)
@@ -256,10 +266,11 @@ def run(x, rng, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1
         constrained, scheme, resample_ess, guard):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
     (eqs. 12-14). x (N, 6) the initial particles (overwritten); ``guard`` = (points
-    (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m): the
+    (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough
+    (6,)): the
     gate and the re-seeding of fuse/robust.py. Returns mean (n_frames, 6), cov
     (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
-    points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m = guard
+    points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
     n_frames, N = z.shape[0], x.shape[0]
     mean = np.empty((n_frames, 6))
     cov = np.empty((n_frames, 6, 6))
@@ -283,6 +294,9 @@ def run(x, rng, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1
             seen = codes[k] != 2
         if seen:
             w_prior[:] = w
+            if codes[k] == 3:  # re-acquired: spread the cloud first
+                _roughen(x, rough, rng)
+                _colour_loglik(x, z[k], inv2s2, cam, dist, w_prior, lw)
             _normalise(lw, w)
             if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / (w @ w) < reseed_ess * N):
                 _reseed(x, w_prior, points[k], n_seed, reseed_sigma, prior_m, rng)

@@ -12,9 +12,10 @@ treated exactly as a missing one.
 gates every detection that follows. After ``reacquire_frames`` gated detections in a row the
 next detection is used whatever its innovation: the Gaussian filters first add
 ``reacquire_sigma_m`` (position) and ``init_vel_sigma_m_s`` (velocity) to P's diagonal, so the
-update moves them onto the detection; pf-constraint re-seeds (below); the plain PF just weighs.
-A wrong detection that is isolated or short (< reacquire_frames frames) therefore never
-changes the estimate.
+update moves them onto the detection; the particle filters add the same spread to every
+particle (roughening) and pf-constraint also re-seeds (below). The next reacquire_frames
+detections are used ungated while the filter settles. A wrong detection that is isolated or
+short (≤ reacquire_frames frames in a row) therefore never changes the estimate.
 
 **Re-seeding (pf-constraint).** The detection's camera ray meets the sphere on which the
 wrist must lie (|p − (S + L2 R u)| = L1, Tao & Hu eq. 15) at up to two points. When the colour
@@ -37,12 +38,15 @@ CODE_NAMES = {USED: "used", GATED: "gated", REACQUIRED: "reacquired", RESEEDED: 
 
 
 def gate(d2: float, gate_chi2: float, run: int, reacquire_frames: int) -> tuple[int, int]:
-    """(code, gated run after this frame) for a detection of Mahalanobis² d2, after ``run``
-    gated detections in a row: USED, GATED, or REACQUIRED once the run is long enough."""
+    """(code, run after this frame) for a detection of Mahalanobis² d2, after ``run`` gated
+    detections in a row: USED, GATED, or REACQUIRED once the run is long enough; after that
+    the next reacquire_frames detections are used ungated (run < 0 counts them down)."""
+    if run < 0:  # the grace after a re-acquisition: the filter settles on the detections
+        return USED, run + 1
     if gate_chi2 <= 0 or d2 <= gate_chi2:
         return USED, 0
     if run >= reacquire_frames:
-        return REACQUIRED, 0
+        return REACQUIRED, -reacquire_frames
     return GATED, run + 1
 
 
@@ -86,6 +90,12 @@ def branch_split(n_seed: int, points: np.ndarray, mean: np.ndarray, cov: np.ndar
     q = [float((p - mean) @ np.linalg.solve(C, p - mean)) for p in points]
     p0 = 1.0 / (1.0 + np.exp(min(0.5 * (q[0] - q[1]), 700.0)))
     return int(np.floor(n_seed * p0 + 0.5))
+
+
+def roughen(x: np.ndarray, sigma_m: float, sigma_m_s: float, eps: np.ndarray) -> None:
+    """In place: every particle's position ± sigma_m, velocity ± sigma_m_s (eps (N, 6))."""
+    x[:, :3] += sigma_m * eps[:, :3]
+    x[:, 3:] += sigma_m_s * eps[:, 3:]
 
 
 def reseed(x: np.ndarray, points: np.ndarray, n0: int, sigma: float, eps: np.ndarray) -> None:
