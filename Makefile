@@ -66,6 +66,7 @@ validate: $(STAMP)
 	ARMTRACK_FUZZ_EXAMPLES=2000 $(BIN)/python -m pytest -q -p no:cacheprovider tests/test_fuzz_readers.py
 	$(BIN)/python validation/run.py
 	$(BIN)/python validation/palm.py
+	nice $(BIN)/python validation/forward_filter.py
 
 docs: $(STAMP)
 	$(BIN)/python -c "from armtrack_cli.cli import render_reference as r; open('docs/cli.md','w').write(r())"
