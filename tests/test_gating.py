@@ -156,3 +156,48 @@ def test_gate_counts_a_run_and_then_reacquires():
     G, U = robust.GATED, robust.USED  # after re-acquiring, 3 frames of grace, then gated again
     assert codes == [U, G, G, G, robust.REACQUIRED, U, U, U, G]
     assert robust.gate(1e9, 0.0, 0, 3) == (robust.USED, 0)  # 0 turns the gate off
+
+
+@pytest.fixture(scope="module")
+def detected(tmp_path_factory):
+    from armtrack_cli import pipeline
+    from armtrack_cli.simulate.arm_session import ArmSimSettings
+
+    folder = tmp_path_factory.mktemp("gate") / "figure8"
+    pipeline.simulate(folder, ArmSimSettings(task="figure8", duration_s=6.0, seed=2))
+    pipeline.run(folder, through="detect")
+    return folder
+
+
+def test_fuse_reports_gated_frames_and_ignores_them(detected, tmp_path):
+    """Through the command line: wrong pixels (a same-hue object 150 px away) on frames 30,
+    60 and 90 of detections.csv are gated, counted in the summary, and the trajectory is the
+    one fuse writes with those three detections marked missing (ok = 0)."""
+    import json
+
+    import pandas as pd
+
+    from .conftest import run_cli
+
+    det = pd.read_csv(detected / "armtrack" / "detections.csv")
+    rows = [30, 60, 90]
+    outs = {}
+    for name in ("wrong", "missing"):
+        out = tmp_path / name
+        out.mkdir()
+        (out / "camera.yaml").write_bytes((detected / "armtrack" / "camera.yaml").read_bytes())
+        d = det.copy()
+        if name == "wrong":
+            d.loc[rows, "u"] = np.clip(d.loc[rows, "u"] + 150, 0, 639)
+            d.loc[rows, "v"] = np.clip(d.loc[rows, "v"] - 120, 0, 479)
+        else:
+            d.loc[rows, "ok"] = 0
+        d.to_csv(out / "detections.csv", index=False)
+        r = run_cli("fuse", str(detected), "--out", str(out), "--json",
+                    "--recipe", "tao2008-pf-constraint")
+        assert r.exit_code == 0, r.output
+        outs[name] = (json.loads(r.stdout), pd.read_csv(out / "trajectory-pf-constraint.csv",
+                                                          comment="#"))
+    assert outs["wrong"][0]["gated_frames"] == 3
+    assert outs["missing"][0]["gated_frames"] == 0
+    pd.testing.assert_frame_equal(outs["wrong"][1], outs["missing"][1])
