@@ -114,3 +114,26 @@ def test_info_describes_a_lone_vicon_csv(tmp_path):
     r = run_cli("info", tmp_path / "trial.csv", "--json")
     assert r.exit_code == 0, r.stderr
     assert '"markers": [\n      "RLEP",\n      "RMEP"\n    ]' in r.stdout
+
+
+def test_three_point_angle_is_arccos_of_cos_flexion_times_cos_carrying():
+    """Random elbow poses: the three-point angle at the elbow from the same points the ISB
+    frames use equals arccos(cos a · cos b) of their Z-X-Y angles (isb_angles docstring)."""
+    from armtrack_cli.compare import isb_angles as ia
+
+    rng = np.random.default_rng(4)
+    n = 200
+    gh = np.tile([0.0, 0.3, 0.0], (n, 1))
+    el, em = np.tile([0.03, 0.0, 0.0], (n, 1)), np.tile([-0.03, 0.0, 0.0], (n, 1))
+    a, b, c = (np.radians(rng.uniform(lo, hi, n)) for lo, hi in ((0, 140), (-20, 20), (-80, 80)))
+    R = Q.to_matrix(Q.multiply(Q.multiply(Q.from_axis_angle(np.array([0, 0, 1.0]), a),
+                                          Q.from_axis_angle(np.array([1.0, 0, 0]), b)),
+                               Q.from_axis_angle(np.array([0, 1.0, 0]), c)))
+    H = np.array([[0, 0, 1.0], [0, 1, 0], [-1, 0, 0]])  # humerus X, Y, Z (columns) in the lab
+    F = H @ R  # forearm axes in the lab
+    us = -0.25 * F[:, :, 1]  # the forearm's Y runs from US to the elbow centre (the origin)
+    rs = us + 0.05 * F[:, :, 2]  # the radial styloid lateral of it (forearm Z)
+    got = ia.zxy_deg(ia.joint_rotation(gh, el, em, rs, us))
+    np.testing.assert_allclose(got, np.degrees(np.stack([a, b, c], -1)), atol=1e-9)
+    three = 180 - jc.three_point_angle_deg(gh, (el + em) / 2, us)
+    np.testing.assert_allclose(three, np.degrees(np.arccos(np.cos(a) * np.cos(b))), atol=1e-6)

@@ -16,7 +16,7 @@ from armtrack_cli import __version__
 from armtrack_cli.cli import text
 from armtrack_cli.cli.batch import cohort_run, each, emit, expand, out_for, progress
 from armtrack_cli.cli.params import Finite, parse_hide, parse_pixels
-from armtrack_cli.core.errors import ArmtrackError
+from armtrack_cli.core.errors import ArmtrackError, DescribedError
 from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
 
@@ -84,11 +84,16 @@ def info(session: str, as_json: bool, imu_rate: float | None, out_dir: str | Non
     """
     from armtrack_cli import pipeline
 
-    result = pipeline.info(session, imu_rate_hz=imu_rate, out_dir=out_dir)
-    if as_json:
-        click.echo(json.dumps(result, indent=2, sort_keys=True))
-    else:
-        click.echo(text.info_text(result))
+    def show(result: dict) -> None:
+        click.echo(json.dumps(result, indent=2, sort_keys=True) if as_json else
+                   text.info_text(result))
+
+    try:
+        result = pipeline.info(session, imu_rate_hz=imu_rate, out_dir=out_dir)
+    except DescribedError as exc:  # info describes, lists each problem, then fails as compare would
+        show(exc.described)
+        raise
+    show(result)
 
 
 @main.command()

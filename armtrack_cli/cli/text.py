@@ -125,6 +125,7 @@ def _groundtruth(info) -> list[str]:
              f"{g['duration_s']:.2f} s; session span {_span(g['span_s'])}",
              "          markers missing: " + ", ".join(f"{k} {v:g}%"
                                                       for k, v in g["missing_pct"].items())]
+    lines += [f"          missing: {p}" for p in g.get("problems", [])]
     if "reach" in g:
         r = g["reach"]
         lines.append(f"          wrist {r['wrist_distance_m'][0]}-{r['wrist_distance_m'][1]} m "

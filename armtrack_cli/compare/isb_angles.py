@@ -6,6 +6,13 @@ Humerus: origin GH; Y from the epicondyles' midpoint to GH; X perpendicular to t
 epicondyles' midpoint; X perpendicular to the plane (US, RS, epicondyles' midpoint), forward;
 Z = X × Y. The elbow's rotation R_hf = R_hᵀ R_f decomposed Z-X-Y (Wu 2005, §3.3): the first
 angle, about the humerus' Z, is flexion (+) / extension (−).
+
+The three-point angle φ (180° − the angle at the elbow between shoulder and wrist, armtrack's
+measure) is the angle between the two frames' Y axes when the points are the same: the
+forearm's Y in the humerus frame is Rz(a) Rx(b) e_y = (−sin a cos b, cos a cos b, sin b), so
+cos φ = cos a · cos b, with a the flexion and b the carrying (varus-valgus) angle; pronation
+does not enter. φ ≥ |a|, most where the arm is extended (a = 20°, b = 15° give φ = 24.9°),
+so the three-point range is the smaller one.
 """
 
 from __future__ import annotations
@@ -34,10 +41,24 @@ def forearm_frame(us, rs, el, em) -> np.ndarray:
     return segment_frame(us, (el + em) / 2, rs - us)  # RS - US points laterally (right)
 
 
+def joint_rotation(gh, el, em, rs, us, *, fore_el=None, fore_em=None) -> np.ndarray:
+    """(N, 3, 3) R_hf = R_hᵀ R_f, the forearm frame in the humerus frame."""
+    fel = el if fore_el is None else fore_el
+    fem = em if fore_em is None else fore_em
+    return np.swapaxes(humerus_frame(gh, el, em), 1, 2) @ forearm_frame(us, rs, fel, fem)
+
+
+def zxy_deg(R: np.ndarray) -> np.ndarray:
+    """(N, 3) Z-X-Y Euler angles (a, b, c) of R = Rz(a) Rx(b) Ry(c), degrees (Wu 2005 §3.3:
+    elbow flexion, carrying angle, pronation): R01 = −sin a cos b, R11 = cos a cos b,
+    R21 = sin b, R20 = −cos b sin c, R22 = cos b cos c."""
+    a = np.arctan2(-R[:, 0, 1], R[:, 1, 1])
+    b = np.arcsin(np.clip(R[:, 2, 1], -1.0, 1.0))
+    c = np.arctan2(-R[:, 2, 0], R[:, 2, 2])
+    return np.degrees(np.stack([a, b, c], -1))
+
+
 def elbow_flexion_deg(gh, el, em, rs, us, *, fore_el=None, fore_em=None) -> np.ndarray:
     """(N,) ISB elbow flexion, degrees: R = Rz(a) Rx(b) Ry(c), a = atan2(−R01, R11).
     ``fore_el``/``fore_em``: the epicondyles as the forearm carries them (default el, em)."""
-    fel = el if fore_el is None else fore_el
-    fem = em if fore_em is None else fore_em
-    R = np.swapaxes(humerus_frame(gh, el, em), 1, 2) @ forearm_frame(us, rs, fel, fem)
-    return np.degrees(np.arctan2(-R[:, 0, 1], R[:, 1, 1]))
+    return zxy_deg(joint_rotation(gh, el, em, rs, us, fore_el=fore_el, fore_em=fore_em))[:, 0]

@@ -38,11 +38,23 @@ def mean_rotation(R: np.ndarray) -> np.ndarray:
     return U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
 
 
-def truth_pose(t: np.ndarray, t_q: np.ndarray, xyz: np.ndarray, rate_hz: float,
-               names: tuple[str, ...], side: str, *, start_t: float) -> TruthPose:
-    """Truth at times t (K,) from Qualisys markers xyz (N, M, 3) in W at session times t_q."""
-    at = np.stack([truth_at(t, t_q, xyz[:, k], rate_hz) for k in range(xyz.shape[1])], 1)
-    wrist, R_WH = hand_frame(at, tuple(names), side)
+def rotations_at(t: np.ndarray, t_q: np.ndarray, R: np.ndarray, rate_hz: float) -> np.ndarray:
+    """(K, 3, 3) rotations R (N, 3, 3) at times t (K,): each column interpolated linearly as a
+    marker is (truth_at: NaN in gaps), then projected onto SO(3) (the nearest rotation, by SVD)."""
+    cols = np.stack([truth_at(t, t_q, R[:, :, j], rate_hz) for j in range(3)], -1)
+    out = np.full(cols.shape, np.nan)
+    ok = np.isfinite(cols).all(axis=(1, 2))
+    if ok.any():
+        U, _, Vt = np.linalg.svd(cols[ok])
+        d = np.sign(np.linalg.det(U @ Vt))
+        out[ok] = U @ (np.eye(3) * np.stack([np.ones_like(d), np.ones_like(d), d], -1)[:, None]) @ Vt
+    return out
+
+
+def pose(t: np.ndarray, wrist: np.ndarray, R_WH: np.ndarray, side: str, *,
+         start_t: float) -> TruthPose:
+    """Truth wrist and angles from R_WH (K, 3, 3) at times t: F is R_WH's chordal mean over the
+    first second from ``start_t`` (the estimate's neutral start), R_FH = R_WFᵀ R_WH."""
     first = (t >= start_t) & (t < start_t + NEUTRAL_S) & np.isfinite(R_WH).all(axis=(1, 2))
     if not first.any():
         return TruthPose(wrist, np.full((t.size, 3), np.nan))
@@ -51,6 +63,22 @@ def truth_pose(t: np.ndarray, t_q: np.ndarray, xyz: np.ndarray, rate_hz: float,
     ang = np.full((t.size, 3), np.nan)
     ang[ok] = wrist_angles_deg(R_WF.T @ R_WH[ok], side)
     return TruthPose(wrist, ang)
+
+
+def truth_pose(t: np.ndarray, t_q: np.ndarray, xyz: np.ndarray, rate_hz: float,
+               names: tuple[str, ...], side: str, *, start_t: float) -> TruthPose:
+    """Truth at times t (K,) from Qualisys markers xyz (N, M, 3) in W at session times t_q."""
+    at = np.stack([truth_at(t, t_q, xyz[:, k], rate_hz) for k in range(xyz.shape[1])], 1)
+    wrist, R_WH = hand_frame(at, tuple(names), side)
+    return pose(t, wrist, R_WH, side, start_t=start_t)
+
+
+def truth_pose_6dof(t: np.ndarray, t_q: np.ndarray, wrist: np.ndarray, R_WH: np.ndarray,
+                    rate_hz: float, side: str, *, start_t: float) -> TruthPose:
+    """Truth at times t (K,) from a QTM 6DOF hand body: its origin (N, 3) in W (the WRIST) and
+    rotation R_WH (N, 3, 3) (its axes those of H), at session times t_q."""
+    return pose(t, truth_at(t, t_q, wrist, rate_hz), rotations_at(t, t_q, R_WH, rate_hz), side,
+                start_t=start_t)
 
 
 def _rom(x: np.ndarray) -> tuple[float, float]:

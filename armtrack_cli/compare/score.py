@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.compare.errors import error_rows, truth_at
+from armtrack_cli.measures.signal import lowpass
 
 JOINTS = ("wrist", "elbow", "shoulder")
 
@@ -25,6 +26,23 @@ class Truth:
 class Score:
     rows: list[dict]  # errors.csv rows
     excluded: dict[str, int]  # METHOD/JOINT -> estimated frames without truth (gaps)
+
+
+def lowpassed(truth: Truth, cutoff_hz: float) -> Truth:
+    """The truth's markers low-passed at their own rate: 4th-order zero-lag Butterworth over
+    each run of seen frames (gaps stay gaps), as labs filter marker data before computing
+    kinematics (Winter, Biomechanics and Motor Control of Human Movement, 2009, ch. 2), so that
+    sampling them at the trajectory's frames does not fold their noise into the measures."""
+    return Truth(truth.t, {k: _runs_lowpassed(x, truth.rate_hz, cutoff_hz)
+                           for k, x in truth.xyz.items()}, truth.rate_hz)
+
+
+def _runs_lowpassed(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
+    out = x.copy()
+    edges = np.flatnonzero(np.diff(np.r_[0, np.isfinite(x).all(axis=1).astype(int), 0]))
+    for a, b in zip(edges[::2], edges[1::2]):
+        out[a:b] = lowpass(x[a:b], fs, fc)
+    return out
 
 
 def truth_markers(t: np.ndarray, truth: Truth) -> dict[str, np.ndarray]:

@@ -51,6 +51,18 @@ class CalibrationError(DataError):
     """The board or the palm markers cannot be found or fitted well enough."""
 
 
+class DescribedError(ArmtrackError):
+    """Problems found while describing a session (`armtrack info`): the first one, and how many
+    more; ``described`` holds the whole description, which lists each (info prints it, then
+    this one line)."""
+
+    def __init__(self, problems: list[ArmtrackError], described: dict):
+        first = problems[0]
+        more = f" (and {len(problems) - 1} more, listed above)" if len(problems) > 1 else ""
+        super().__init__(first.path, first.problem + more, first.hint)
+        self.described = described
+
+
 class OutputError(ArmtrackError):
     """An output could not be written."""
 

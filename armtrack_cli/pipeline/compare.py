@@ -9,10 +9,11 @@ from typing import Any
 import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
-from armtrack_cli.compare.score import JOINTS, Truth, score, truth_markers
+from armtrack_cli.compare.score import JOINTS, Truth, lowpassed, score, truth_markers
 from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.methods import METHODS
+from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
@@ -76,6 +77,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     trajs = {m: read_trajectory(work / f"trajectory-{m}.csv") for m in methods}
     truth, offset = synchronised_truth(session, trajs)
     rows, mrows, excluded = [], [], {}
+    for_measures = lowpassed(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
     for m, traj in trajs.items():
         t = traj["t"].to_numpy()
         if truth.t[0] > t[-1] or truth.t[-1] < t[0]:
@@ -89,7 +91,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
         rows += s.rows
         mrows += measure_comparison(m, read_kinematics(work / f"kinematics-{m}.csv"),
                                     truth_inputs(trajectory_inputs(traj, session), session,
-                                                 truth_markers(t, truth)))
+                                                 truth_markers(t, for_measures)))
         excluded.update(s.excluded)
     with output_set():
         write_table(work / "errors.csv", pd.DataFrame(rows, columns=list(COLUMNS)),

@@ -12,7 +12,7 @@ import numpy as np
 
 from armtrack_cli.compare import hand_truth, joint_centres
 from armtrack_cli.compare.score import Truth
-from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.errors import ConfigError, GroundTruthError
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.config import Session
 from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
@@ -28,19 +28,80 @@ def _columns(traj: MarkerTrajectories, names: list[str], what: str) -> np.ndarra
     return np.stack([traj.marker(n) for n in names], axis=1)
 
 
+def marker_problem(session: Session, traj: MarkerTrajectories, name: str,
+                   static: MarkerTrajectories | None) -> GroundTruthError | None:
+    """Why ``name`` (a marker of the trial, or a landmark [groundtruth] clusters carries from the
+    static trial) cannot be had from the files, or None when it can."""
+    gt = session.groundtruth
+    if name not in gt.clusters:
+        in_static = static is not None and name in static.names
+        hint = ("it is in the static trial: name its cluster in [groundtruth] clusters"
+                if in_static else "a landmark seen only in the static trial needs [groundtruth] "
+                "clusters")
+        if name not in traj.names:
+            return missing_marker(traj, name, f"[groundtruth] markers in "
+                                  f"{session.toml_path.name}; {hint}")
+        gone = _never_seen(traj, name)
+        return GroundTruthError(gone.path, gone.problem, hint) if gone and in_static else gone
+    if static is None:
+        return GroundTruthError(session.toml_path, f"[groundtruth] clusters carries {name!r} from "
+                                "the static trial, but [groundtruth] static names none",
+                                'add static = "…_static.csv"')
+    if name not in static.names:
+        return missing_marker(static, name, "a landmark [groundtruth] clusters carries; the "
+                              "static trial must hold it")
+    names = joint_centres.cluster_names(static.names, gt.clusters[name])
+    if len(names) < 3:
+        return GroundTruthError(static.path, f"has {len(names)} markers of the cluster carrying "
+                                f"{name!r} ({', '.join(names) or 'none'}): a rigid fit needs at "
+                                "least 3", "check [groundtruth] clusters")
+    lost = [n for n in names if n not in traj.names]
+    if lost:
+        return GroundTruthError(traj.path, f"has no marker {lost[0]!r} of the cluster carrying "
+                                f"{name!r}", f"its markers are {', '.join(traj.names)}")
+    return _never_seen(static, name)
+
+
+def _never_seen(traj: MarkerTrajectories, name: str) -> GroundTruthError | None:
+    if np.isfinite(traj.marker(name)).all(axis=1).any():
+        return None
+    return GroundTruthError(traj.path, f"marker {name!r} is never seen: every frame is a gap",
+                            "check the marker labels in the capture software")
+
+
+def name_problems(session: Session, traj: MarkerTrajectories,
+                  static: MarkerTrajectories | None) -> list[GroundTruthError]:
+    """Every marker, landmark or rigid body [groundtruth] names that compare could not find in
+    the files (one error each, in the order named): for `armtrack info` to list."""
+    gt = session.groundtruth
+    seen, out = set(), []
+    for expr in gt.markers.values():
+        for n in point_markers(expr) or ():
+            if n not in seen:
+                seen.add(n)
+                out += [e for e in (marker_problem(session, traj, n, static),) if e]
+    if gt.hand is not None:
+        try:
+            body_rotation_W(traj, gt.hand, gt.to_world, session.toml_path)
+        except GroundTruthError as exc:
+            out.append(exc)
+    elif session.palm is not None:
+        out += [ConfigError(session.toml_path, f"[groundtruth] markers lacks palm marker {m}",
+                            "name its Qualisys marker, or a 6DOF hand body as [groundtruth] hand")
+                for m in session.palm.markers if m not in gt.markers]
+    return out
+
+
 def marker_track(session: Session, traj: MarkerTrajectories, name: str,
                  static: MarkerTrajectories | None) -> np.ndarray:
     """(N, 3) one marker of the trial, or a landmark carried by its cluster (capture frame)."""
     gt = session.groundtruth
-    if name in traj.names and name not in gt.clusters:
-        return traj.marker(name)
+    problem = marker_problem(session, traj, name, static)
+    if problem is not None:
+        raise problem
     if name not in gt.clusters:
-        raise missing_marker(traj, name, f"[groundtruth] markers in {session.toml_path.name}; a "
-                             "landmark seen only in the static trial needs [groundtruth] clusters")
+        return traj.marker(name)
     names = joint_centres.cluster_names(static.names, gt.clusters[name])
-    if len(names) < 3:
-        raise GroundTruthError(static.path, f"has {len(names)} markers of the cluster carrying "
-                               f"{name!r}: a rigid fit needs at least 3")
     ref, point = joint_centres.calibrate(_columns(static, names, "cluster, static trial"),
                                          _columns(static, [name], "landmark")[:, 0])
     return joint_centres.carry(ref, point, _columns(traj, names, f"cluster carrying {name}"))

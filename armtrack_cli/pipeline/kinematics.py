@@ -65,6 +65,15 @@ def truth_inputs(est: Inputs, session: Session, truth: dict[str, np.ndarray]) ->
     return None
 
 
+def truth_pose_inputs(est: Inputs, wrist: np.ndarray, angles_deg: np.ndarray) -> Inputs:
+    """A ground-truth wrist pose (a 6DOF hand body: WRIST (N, 3) and wrist angles (N, 3) deg,
+    at the trajectory's frames) as Inputs, on the frames where the estimate exists."""
+    mask = np.isfinite(est.wrist).all(axis=1)[:, None]
+    return Inputs(t=est.t, wrist=np.where(mask, wrist, np.nan), task=est.task, side=est.side,
+                  wrist_angles=np.where(mask, angles_deg, np.nan)
+                  if est.wrist_angles is not None else None)
+
+
 def _number(v) -> float:
     try:
         return float(v)

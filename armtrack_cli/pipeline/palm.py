@@ -14,21 +14,25 @@ import pandas as pd
 
 from armtrack_cli.compare import palm as cmp
 from armtrack_cli.compare.errors import truth_at
+from armtrack_cli.compare.score import Truth, lowpassed
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.wrist import ANGLES
 from armtrack_cli.core.wrist_measures import angular_speeds
 from armtrack_cli.fuse.palm_init import depth_at, initial_pose
 from armtrack_cli.fuse.palm_models import PalmUkfSettings, Rig
 from armtrack_cli.fuse.palm_run import marker_area, track, trajectory_table
+from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.kinematics import (
     kinematics_table,
     measure_comparison,
     trajectory_inputs,
     truth_inputs,
+    truth_pose_inputs,
 )
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, require
 from armtrack_cli.session.depth import depth_path, read_depth_frame
+from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.palm_io import read_palm_blobs, read_palm_toml
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
@@ -114,40 +118,82 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
             "init_residual_mm": how["residual_mm"], "depth_missing": not init.used_depth}
 
 
-def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict[str, Any]:
-    """Palm sessions: ukf-palm against the Qualisys palm markers -> errors.csv (WRIST, cm),
-    wrist-angle-errors.csv (deg) and measures.csv (estimate, truth, difference)."""
+def _marker_truth(session: Session, t: np.ndarray, start_t: float
+                  ) -> tuple[cmp.TruthPose, dict[str, np.ndarray]]:
+    """The truth from the Qualisys palm markers: the hand frame from the six (core/wrist.py),
+    and each marker at the trajectory's times (for the measures)."""
     gt = session.groundtruth
     missing = [m for m in session.palm.markers if m not in gt.markers]
     if missing:
         raise ConfigError(session.toml_path, f"[groundtruth] markers lacks {', '.join(missing)}",
-                          "name the Qualisys marker of every palm marker, e.g. WRIST = \"WRIST\"")
+                          "name the Qualisys marker of every palm marker, e.g. WRIST = \"WRIST\", "
+                          "or a QTM 6DOF hand body as [groundtruth] hand")
+    qtm = read_qualisys(gt.file)
+    cols = select_markers(qtm, {m: gt.markers[m] for m in session.palm.markers}, session.toml_path)
+    xyz = np.stack([to_world(qtm.xyz[:, cols[m]], gt.to_world) for m in session.palm.markers], 1)
+    t_q = _overlapping(session, qtm.t, t)
+    truth = cmp.truth_pose(t, t_q, xyz, qtm.rate_hz, session.palm.markers, session.meta.side,
+                           start_t=start_t)
+    smooth = lowpassed(Truth(t_q, {m: xyz[:, k] for k, m in enumerate(session.palm.markers)},
+                             qtm.rate_hz), DEFAULT.lowpass_hz)  # as labs do, pipeline/compare
+    return truth, {m: truth_at(t, t_q, x, qtm.rate_hz) for m, x in smooth.xyz.items()}
+
+
+def _body_truth(session: Session, t: np.ndarray, start_t: float
+                ) -> tuple[cmp.TruthPose, np.ndarray]:
+    """The truth from the QTM 6DOF hand body [groundtruth] hand names: its origin is the WRIST
+    (or the body [groundtruth] markers.WRIST names), its rotation R_WH (axes those of H); and
+    the WRIST for the measures, low-passed at its own rate as labs do (pipeline/compare)."""
+    gt = session.groundtruth
+    body = read_markers(gt.file)
+    R_WH = body_rotation_W(body, gt.hand, gt.to_world, session.toml_path)
+    origin = gt.markers.get("WRIST", gt.hand)
+    col = select_markers(body, {"WRIST": origin}, session.toml_path)["WRIST"]
+    t_q = _overlapping(session, body.t, t)
+    wrist = to_world(body.xyz[:, col], gt.to_world)
+    smooth = lowpassed(Truth(t_q, {"WRIST": wrist}, body.rate_hz), DEFAULT.lowpass_hz)
+    return (cmp.truth_pose_6dof(t, t_q, wrist, R_WH, body.rate_hz, session.meta.side,
+                                start_t=start_t),
+            truth_at(t, t_q, smooth.xyz["WRIST"], body.rate_hz))
+
+
+def _overlapping(session: Session, t_stream: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The ground truth's times on the session clock; an error when they miss the trajectory."""
+    t_q = t_stream + session.offset_s("groundtruth_offset_s")  # session = stream + offset
+    if t_q[0] > np.nanmax(t) or t_q[-1] < np.nanmin(t):
+        raise DataError(session.groundtruth.file, f"does not overlap trajectory-{METHOD}.csv in "
+                        "time", "check [sync] groundtruth_offset_s")
+    return t_q
+
+
+def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict[str, Any]:
+    """Palm sessions: ukf-palm against the Qualisys palm markers, or a QTM 6DOF hand body ->
+    errors.csv (WRIST, cm), wrist-angle-errors.csv (deg) and measures.csv (estimate, truth,
+    difference)."""
     methods = methods or (METHOD,)
     if methods != (METHOD,):
         raise ConfigError(session.toml_path, f"is a palm session; only {METHOD} scores here",
                           f"use --method {METHOD}")
     traj = read_trajectory(dest / f"trajectory-{METHOD}.csv")
-    qtm = read_qualisys(gt.file)
-    cols = select_markers(qtm, {m: gt.markers[m] for m in session.palm.markers}, session.toml_path)
-    xyz = np.stack([to_world(qtm.xyz[:, cols[m]], gt.to_world) for m in session.palm.markers], 1)
     t = traj["t"].to_numpy()
-    t_q = qtm.t + session.offset_s("groundtruth_offset_s")  # session time = stream time + offset
-    if t_q[0] > np.nanmax(t) or t_q[-1] < np.nanmin(t):
-        raise DataError(gt.file, f"does not overlap trajectory-{METHOD}.csv in time",
-                        "check [sync] groundtruth_offset_s")
-    truth = cmp.truth_pose(t, t_q, xyz, qtm.rate_hz, session.palm.markers, session.meta.side,
-                           start_t=float(t[np.isfinite(traj["wrist_x"].to_numpy())][0]))
+    start_t = float(t[np.isfinite(traj["wrist_x"].to_numpy())][0])
+    est = trajectory_inputs(traj, session)
+    if session.groundtruth.hand is not None:
+        truth, wrist = _body_truth(session, t, start_t)
+        tin = truth_pose_inputs(est, wrist, truth.angles_deg)
+    else:
+        truth, markers = _marker_truth(session, t, start_t)
+        tin = truth_inputs(est, session, markers)
     res = cmp.score(METHOD, traj, truth)
-    markers = {m: truth_at(t, t_q, xyz[:, k], qtm.rate_hz)
-               for k, m in enumerate(session.palm.markers)}
-    mrows = measure_comparison(METHOD, read_kinematics(dest / f"kinematics-{METHOD}.csv"),
-                               truth_inputs(trajectory_inputs(traj, session), session, markers))
+    mrows = measure_comparison(METHOD, read_kinematics(dest / f"kinematics-{METHOD}.csv"), tin)
     speeds = {r["measure"] for r in res.speed_rows}
     mrows = [r for r in mrows if r["measure"] not in speeds] + res.speed_rows
     with output_set():
         for name, tab in (("errors.csv", res.position), ("wrist-angle-errors.csv", res.angles),
                           ("measures.csv", pd.DataFrame(mrows))):
-            write_table(dest / name, tab, command="compare", settings={"methods": [METHOD]})
+            write_table(dest / name, tab, command="compare", settings={
+                "methods": [METHOD], "truth": "6DOF hand body" if session.groundtruth.hand
+                else "palm markers"})
     return {"errors": str(dest / "errors.csv"), "measures": str(dest / "measures.csv"),
             "angle_errors": str(dest / "wrist-angle-errors.csv"), "methods": [METHOD],
             "excluded_frames": {f"{METHOD}/wrist": res.excluded}, "table": res.text,

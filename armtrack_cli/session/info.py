@@ -7,6 +7,7 @@ malformed file stops here with a clear error.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -20,9 +21,10 @@ from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.groundtruth import read_markers
 from armtrack_cli.session.images import IMAGE_EXT
 from armtrack_cli.session.imu import missing_channels, read_imu
-from armtrack_cli.session.point_expr import point_markers
-from armtrack_cli.session.qualisys import select_markers, to_world
+from armtrack_cli.session.qualisys import to_world
 from armtrack_cli.session.video import probe_video
+
+Check = Callable[[Session, MarkerTrajectories, MarkerTrajectories | None], list]
 
 
 def _span(t: np.ndarray, offset: float | str) -> list[float] | str:
@@ -90,7 +92,30 @@ def check_reach(session: Session, traj: MarkerTrajectories, cols: dict[str, int]
             "beyond_reach_pct": round(100.0 * float((d > reach + 0.01).mean()), 2)}
 
 
-def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str, Any]:
+def describe_groundtruth(session: Session, check: Check | None) -> dict[str, Any]:
+    """The ground-truth file (and static trial), the names [groundtruth] gives, and ``check``'s
+    one line for each name the files lack."""
+    gt = session.groundtruth
+    m = read_markers(gt.file)
+    static = read_markers(gt.static) if gt.static is not None else None
+    problems = check(session, m, static) if check is not None else []
+    out = describe_markers(m, session.sync.groundtruth_offset_s)
+    out["named"] = dict(gt.markers)
+    out["problems"] = [str(p) for p in problems]
+    if static is not None:
+        out["static"] = describe_markers(static, 0.0)
+    seen = {r: m.names.index(e) for r, e in gt.markers.items() if e in m.names and e not in
+            gt.clusters and np.isfinite(m.marker(e)).all(axis=1).any()}
+    reach = check_reach(session, m, seen)
+    if reach:
+        out["reach"] = reach
+    return out
+
+
+def describe(session: Session, *, imu_rate_hz: float | None = None,
+             check: Check | None = None) -> dict[str, Any]:
+    """``check(session, trial, static)``: the problems of the names [groundtruth] gives (the
+    caller's, which knows how compare finds them)."""
     out: dict[str, Any] = {"session": {
         "folder": str(session.root), "id": session.meta.id, "subject": session.meta.subject,
         "task": session.meta.task, "side": session.meta.side, "kind": session.kind,
@@ -139,22 +164,15 @@ def describe(session: Session, *, imu_rate_hz: float | None = None) -> dict[str,
         out["palm"] = {"markers": list(session.palm.markers), "link_m": list(session.palm.link_m)}
         have.add("palm")
     if session.groundtruth is not None:
-        m = read_markers(session.groundtruth.file)
-        cols = select_markers(m, {r: e for r, e in session.groundtruth.markers.items()
-                                  if e in m.names or e not in session.groundtruth.clusters
-                                  and point_markers(e) == (e,)}, session.toml_path)
-        out["groundtruth"] = describe_markers(m, session.sync.groundtruth_offset_s)
-        out["groundtruth"]["named"] = dict(session.groundtruth.markers)
-        if session.groundtruth.static is not None:
-            out["groundtruth"]["static"] = describe_markers(
-                read_markers(session.groundtruth.static), 0.0)
-        reach = check_reach(session, m, cols)
-        if reach:
-            out["groundtruth"]["reach"] = reach
+        out["groundtruth"] = describe_groundtruth(session, check)
         have.add("groundtruth")
     lacks = {"imu": "an IMU with " + " and ".join(out["imu"]["missing_for_fusion"])} \
         if "imu" in out and "imu" not in have else {}
     out["methods"] = readiness(session, have, lacks)
+    missing = len(out.get("groundtruth", {}).get("problems", []))
+    if missing:
+        out["methods"]["compare"] = (f"needs the {missing} name(s) [groundtruth] gives that the "
+                                     "files lack (listed above)")
     return out
 
 
@@ -181,11 +199,12 @@ def _head(path: Path, n: int = 32) -> bytes:
 VIDEO_EXT = (".mp4", ".avi", ".mkv", ".mov", ".m4v")
 
 
-def describe_path(path: Path, *, imu_rate_hz: float | None = None) -> dict[str, Any]:
+def describe_path(path: Path, *, imu_rate_hz: float | None = None,
+                  check: Check | None = None) -> dict[str, Any]:
     """A session folder, or a lone recorded file: a Qualisys TSV, a video or an IMU export."""
     path = Path(path)
     if path.is_dir():
-        return describe(load_session(path), imu_rate_hz=imu_rate_hz)
+        return describe(load_session(path), imu_rate_hz=imu_rate_hz, check=check)
     if not path.is_file():
         raise DataError(path, "not found", "give a session folder or a recorded file")
     out: dict[str, Any] = {"session": {"folder": str(path.parent), "id": path.name, "subject": None,

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from armtrack_cli.core.errors import GroundTruthError
+from armtrack_cli.core.errors import GroundTruthError, did_you_mean
 from armtrack_cli.core.limits import MAX_SESSION_S
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.text_table import parse_table, read_text_lines
@@ -146,12 +146,13 @@ def select_markers(traj: MarkerTrajectories, wanted: dict[str, str], toml: Path)
 
 def missing_marker(traj: MarkerTrajectories, name: str, where: str) -> GroundTruthError:
     """The error for a marker the file lacks; a 6DOF export says it holds bodies, not markers."""
+    close = did_you_mean(name, traj.names)  # a typo: name the near one, not all of them
     if traj.rotations is not None:
         return GroundTruthError(traj.path, f"is a 6DOF (rigid body) export with no body {name!r} "
-                                f"({where})", f"its bodies are {', '.join(traj.names)}: name a "
-                                "body there, or export 3D markers from QTM")
+                                f"({where})", close or f"its bodies are {', '.join(traj.names)}: "
+                                "name a body there, or export 3D markers from QTM")
     return GroundTruthError(traj.path, f"has no marker {name!r} ({where})",
-                            f"its markers are {', '.join(traj.names)}")
+                            close or f"its markers are {', '.join(traj.names)}")
 
 
 def to_world(xyz: np.ndarray, T: np.ndarray) -> np.ndarray:
