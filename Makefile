@@ -21,7 +21,7 @@ setup: $(STAMP)
 
 demo: $(STAMP)
 	$(BIN)/armtrack info $(DEMO)
-	$(BIN)/armtrack run $(DEMO) --method ekf --method pf-constraint --out $(DEMO_OUT)/circle-01
+	$(BIN)/armtrack run $(DEMO) --method ekf --method pf-constraint --method arm-smoother --out $(DEMO_OUT)/circle-01
 	$(BIN)/armtrack info sample_sessions/wrist-rom-01
 	$(BIN)/armtrack run sample_sessions/reach-01 sample_sessions/wrist-rom-01 --out $(DEMO_OUT)
 	$(BIN)/armtrack simulate $(DEMO_OUT)/sessions/circle-02 --seed 5 --recorded 2026-11-27T10:15:00 --force

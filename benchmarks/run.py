@@ -77,6 +77,8 @@ def prepared(tmp: str):
     out = Path(tmp) / "fuse"
     pipeline.calibrate(folder, out=out)
     pipeline.detect(folder, out=out)
+    # pf-constraint: the filters' rows and the scaling run on arrays (the default arm-smoother
+    # needs the IMU samples themselves; its first pass is this pf-constraint + RTS)
     s, _ = settings_for(None, (), method="pf-constraint", seed=0)
     prep = prepare(load_session(folder), out, s)
     inp, proj, arm = prep.inputs, prep.projection, prep.arm
@@ -160,8 +162,10 @@ def stage(code: str) -> tuple[float, float, str]:
 def end_to_end(tmp: str, minutes: float) -> list[tuple]:
     """A session through every stage with the default method, each stage in its own process
     so its peak memory is its own; and decoding its video once, the reference."""
-    folder = str(Path(tmp) / f"long-{minutes:g}")
-    stage(f"pipeline.simulate({folder!r}, ArmSimSettings(duration_s={minutes * 60}))")
+    keep = os.environ.get("BENCH_SESSIONS")  # a folder where the long sessions are kept
+    folder = str(Path(keep or tmp) / f"long-{minutes:g}")
+    if not (keep and (Path(folder) / "video.mp4").exists()):  # simulating is slow: reuse
+        stage(f"pipeline.simulate({folder!r}, ArmSimSettings(duration_s={minutes * 60}))")
     video = str(Path(folder) / "video.mp4")
     rows = [("decode the video once (reference)",
              *stage(f"sum(1 for _ in iter_frames(probe_video({video!r})))"))]
@@ -174,13 +178,17 @@ def main() -> None:
     import tempfile
 
     from filters import gaussian_vs_filterpy, pf_vs_reference, resampling_vs_filterpy, smoother_rows
+    from pf_profile import passes
 
     minutes = [float(m) for m in os.environ.get("BENCH_MINUTES", "10,60").split(",")]
+    load0 = os.getloadavg()[1]
     res = {}
     with tempfile.TemporaryDirectory() as tmp:
         res["detect"] = detection_rows(tmp)
         folder, out, s, inp, proj, arm, x0, P0 = prepared(tmp)
         res["pf"] = pf_vs_reference(inp, proj, arm, x0, P0, s)
+        res["pf_passes"] = passes()
+        res["method"] = s.method
         res["gauss"] = gaussian_vs_filterpy(inp, proj, x0, P0, s)
         res["smoother"] = smoother_rows()
         res["resampling"] = resampling_vs_filterpy()
@@ -190,7 +198,8 @@ def main() -> None:
     libs = ", ".join(f"{p} {version(p)}" for p in ("numpy", "scipy", "numba",
                                                    "opencv-python-headless", "filterpy"))
     res["machine"] = (f"{cpu()}, {os.cpu_count()} logical CPUs, Python "
-                      f"{platform.python_version()}; {libs}")
+                      f"{platform.python_version()}; {libs}; load average (5 min) "
+                      f"{load0:.1f} at the start, {os.getloadavg()[1]:.1f} at the end")
     res["paper"] = PAPER_S_PER_FRAME
     text = write_report(res, REPO / "docs" / "benchmarks.md")
     print(text)

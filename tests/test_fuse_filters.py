@@ -116,18 +116,30 @@ def test_steps_stacked_are_the_per_frame_steps():
         np.testing.assert_array_equal(Q[k], inp.steps.Q(k))
 
 
+def test_smoothing_one_block_of_steps_at_a_time_is_smoothing_with_them_all():
+    """rts_smooth fed F, b, Q a block at a time (Steps.stacked(lo, hi), as smooth() does to
+    keep memory flat) gives what it gives with the whole arrays."""
+    inp, x0, P0, FbQ = _problem(n_frames=60)
+    x, P = _textbook(inp, x0, P0, FbQ, 16.0 * np.eye(2))
+    whole = gaussian.rts_smooth(x, P, *inp.steps.stacked(), block=7)
+    blocks = gaussian.rts_smooth(x, P, steps=inp.steps.stacked, block=7)
+    for u, v in zip(whole, blocks):
+        np.testing.assert_array_equal(u, v)
+
+
 def test_run_particles_matches_the_kalman_filter():
     """Bootstrap PF (numpy reference), 80,000 particles, resampled every frame: its mean is
-    within 0.2 of the KF's standard deviation of the KF mean, its spread within 15 %. (The
-    worst component is the unobserved height, whose Monte-Carlo error grows with every
-    resampling: 0.30 σ at 20,000 particles, 0.09-0.10 σ at 80,000 over seeds 3-5.)"""
+    within 0.3 of the KF's standard deviation of the KF mean, its spread within 15 %. (The
+    bound is on the worst of 25 frames × 6 components; the worst is usually the unobserved
+    height, whose Monte-Carlo error grows with every resampling: over seeds 0-9 of the SFC64
+    generator the worst is 0.07-0.24 σ and the spread's worst 5-13 %.)"""
     inp, x0, P0, FbQ = _problem(n_frames=25)
     s = FuseSettings(method="pf", particles=80000, seed=3)
     est = run_particles(inp, x0, P0, LinearCamera(), s, None, constrained=False,
                         compiled=False)
     x_ref, P_ref = _textbook(inp, x0, P0, FbQ, 16.0 * np.eye(2))
     sd = np.sqrt(np.diagonal(P_ref, axis1=1, axis2=2))
-    assert np.all(np.abs(est.mean - x_ref) < 0.2 * sd), np.max(np.abs(est.mean - x_ref) / sd)
+    assert np.all(np.abs(est.mean - x_ref) < 0.3 * sd), np.max(np.abs(est.mean - x_ref) / sd)
     np.testing.assert_allclose(est.sd, sd, rtol=0.15)
 
 
@@ -208,7 +220,8 @@ def test_one_step_equals_filterpy():
 
 
 
-@pytest.mark.parametrize("method", ["inertial", "ekf", "ukf", "pf", "pf-constraint"])
+@pytest.mark.parametrize("method", ["inertial", "ekf", "ukf", "pf", "pf-constraint",
+                                    "arm-smoother"])
 def test_kernels_load_before_a_timed_run(method):
     from armtrack_cli.fuse.methods import load_kernels
 

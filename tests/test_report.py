@@ -1,7 +1,7 @@
 """`armtrack report` and the measures on simulated sessions with ground truth (issue 12).
 
 The arm session is the bundled circle-01 (20 s, Xsens export, Qualisys with two gaps in the
-wrist marker), run through calibrate, detect, fuse (pf-constraint and ekf) and compare into a tmp
+wrist marker), run through calibrate, detect, fuse (arm-smoother and ekf) and compare into a tmp
 work folder. The palm session is the bundled wrist-rom-01 with a synthetic trajectory-ukf-palm
 .csv made from its exact truth plus seeded noise (the ukf-palm method is another issue).
 """
@@ -59,7 +59,7 @@ def test_measures_agree_with_qualisys_on_a_simulated_session(arm):
     5 %, path length within 3 %."""
     _, out = arm
     m = pd.read_csv(out / "measures.csv", dtype={"segment": str})
-    m = m[(m["method"] == "pf-constraint") & (m["segment"] == "session")].set_index("measure")
+    m = m[(m["method"] == "arm-smoother") & (m["segment"] == "session")].set_index("measure")
     assert abs(m.loc["elbow_flexion_rom", "error"]) <= 3.0
     assert abs(m.loc["wrist_peak_speed", "error_pct"]) <= 5.0
     assert abs(m.loc["wrist_path_length", "error_pct"]) <= 3.0
@@ -82,11 +82,11 @@ def test_every_page_is_a4_and_headed_with_subject_date_and_page_number(arm):
 
 def test_the_pdf_text_holds_the_numbers_of_the_csvs(arm):
     """The report prints speeds and lengths to 3 decimals, times to 2, angles to 1, counts
-    as integers; each session measure of kinematics-pf-constraint.csv, each estimate and
+    as integers; each session measure of kinematics-arm-smoother.csv, each estimate and
     reference of measures.csv and each Table I cell of errors.csv is found in the text."""
     _, out = arm
     text = "\n".join(pdf_pages(out / "report.pdf"))
-    kin = pd.read_csv(out / "kinematics-pf-constraint.csv", dtype={"value": str, "segment": str},
+    kin = pd.read_csv(out / "kinematics-arm-smoother.csv", dtype={"value": str, "segment": str},
                       keep_default_na=False)
     decimals = lambda m: (1 if m.startswith(("elbow", "shoulder", "forearm")) else  # noqa: E731
                           0 if m in ("movement_units", "segments") else
@@ -102,14 +102,14 @@ def test_the_pdf_text_holds_the_numbers_of_the_csvs(arm):
     assert checked >= 20
     m = pd.read_csv(out / "measures.csv", dtype={"segment": str, "estimate": str, "truth": str},
                     keep_default_na=False)
-    for r in m[(m["method"] == "pf-constraint") & (m["segment"] == "session")].itertuples():
+    for r in m[(m["method"] == "arm-smoother") & (m["segment"] == "session")].itertuples():
         for v in (r.estimate, r.truth):
             if not v.startswith("not computable"):
                 assert shown(float(v), decimals(r.measure)) in text, r
     e = pd.read_csv(out / "errors.csv")
     for r in e[e["axis"] != "3d"].itertuples():
         assert f"{shown(r.mean_cm, 2)}/{shown(r.std_cm, 2)}" in text, r
-    wrist = e[(e["method"] == "pf-constraint") & (e["joint"] == "wrist") & (e["axis"] == "3d")]
+    wrist = e[(e["method"] == "arm-smoother") & (e["joint"] == "wrist") & (e["axis"] == "3d")]
     assert f"{wrist['rmse_cm'].iloc[0]:.2f} cm RMS" in text
 
 
@@ -117,7 +117,7 @@ def test_the_first_page_says_who_what_and_the_verdict(arm):
     _, out = arm
     first = pdf_pages(out / "report.pdf")[0]
     for words in ("Subject: SIM", "circles on the table", "right arm",
-                  "particle filter with arm constraint", "elbow flexion (0° = straight arm)",
+                  "orientation-aware arm smoother", "elbow flexion (0° = straight arm)",
                   "frames in which the camera found the wrist", "samples", "lost",
                   "reprojection error", "time offsets used", "Verdict: "):
         assert words in first, words
@@ -215,7 +215,7 @@ def test_several_sessions_of_one_subject_give_a_progress_report(arm, tmp_path):
     assert pages[0].index("2026-11-20 (circle-01") < pages[0].index("2026-11-27 (circle-02")
     assert "beyond uncertainty" in pages[0] and len(pages) == 4
     assert "Movement report" in pages[2] and "circle-02" in pages[3]
-    kin = pd.read_csv(out / "kinematics-pf-constraint.csv", dtype={"value": str}).set_index(
+    kin = pd.read_csv(out / "kinematics-arm-smoother.csv", dtype={"value": str}).set_index(
         "measure")
     assert shown(float(kin.loc["elbow_flexion_rom", "value"]), 1) in pages[0]
     toml.write_text(toml.read_text().replace('subject = "SIM"', 'subject = "S02"'))

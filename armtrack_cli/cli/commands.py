@@ -160,8 +160,9 @@ def fuse(sessions, recipe, method, particles, seed, sets, as_json, out_dir) -> N
     """IMU and camera detections fused into wrist and elbow trajectories
     (trajectory-METHOD.csv) and their clinical measures (kinematics-METHOD.csv).
 
-    Without --method or --recipe the method is pf-constraint, Tao & Hu's layered particle
-    filter with the arm-geometry constraint.
+    Without --method or --recipe the method is arm-smoother: Tao & Hu's models and arm
+    constraint over the whole session, with the IMU's orientation error and accelerometer
+    bias estimated (docs/fusion.md); --recipe tao2008-pf-constraint is the paper's filter.
     """
     from armtrack_cli import pipeline
 
@@ -215,7 +216,7 @@ def report(sessions, output, as_json, out_dir) -> None:
               default="report", show_default=True, help="The last stage to run.")
 @click.option("--method", "methods", type=click.Choice(list(METHODS)), multiple=True,
               help="Fusion methods (repeatable); default: the recipe's, else the session "
-              "kind's (pf-constraint for arm sessions, ukf-palm for palm sessions).")
+              "kind's (arm-smoother for arm sessions, ukf-palm for palm sessions).")
 @recipe_option
 @click.option("--seed", type=click.IntRange(min=0), help="Random seed (same seed, same bytes).")
 @set_option

@@ -141,8 +141,9 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
     return Gaussian(s.x + gain @ (z - zm), 0.5 * (P + P.T))
 
 
-def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray, b: np.ndarray,
-               Q: np.ndarray, *, block: int = 4096) -> tuple[np.ndarray, np.ndarray]:
+def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
+               b: np.ndarray | None = None, Q: np.ndarray | None = None, *, steps=None,
+               block: int = 4096) -> tuple[np.ndarray, np.ndarray]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
     x (n_steps, n), P (n_steps, n, n): filtered means and covariances; F (n_steps, n, n),
@@ -153,14 +154,18 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray, b: np.ndarray,
     gain_k = P_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹; then backwards
     x^s_k = x_k + gain_k (x^s_{k+1} − x⁻_{k+1}),
     P^s_k = P_k + gain_k (P^s_{k+1} − P⁻_{k+1}) gain_kᵀ (Rauch, Tung & Striebel 1965).
+    Instead of F, b, Q: ``steps(lo, hi)`` giving their rows [lo, hi), one block at a time, so
+    that they are never held for the whole session.
     """
+    if steps is None:
+        steps = lambda lo, hi: (F[lo:hi], b[lo:hi], Q[lo:hi])  # noqa: E731
     xs, Ps = x.copy(), P.copy()
     for stop in range(x.shape[0] - 1, 0, -block):  # steps k in [start, stop), backwards
         start = max(0, stop - block)
-        Fn = F[start + 1:stop + 1]
+        Fn, bn, Qn = steps(start + 1, stop + 1)
         FnT = np.swapaxes(Fn, 1, 2)
-        xp = np.einsum("kij,kj->ki", Fn, x[start:stop]) + b[start + 1:stop + 1]
-        Pp = Fn @ P[start:stop] @ FnT + Q[start + 1:stop + 1]
+        xp = np.einsum("kij,kj->ki", Fn, x[start:stop]) + bn
+        Pp = Fn @ P[start:stop] @ FnT + Qn
         gain = np.swapaxes(np.linalg.solve(np.swapaxes(Pp, 1, 2),
                                            np.swapaxes(P[start:stop] @ FnT, 1, 2)), 1, 2)
         for j in range(stop - start - 1, -1, -1):

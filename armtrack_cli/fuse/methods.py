@@ -11,7 +11,7 @@ import numpy as np
 from armtrack_cli.filters import gaussian
 from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
-from armtrack_cli.fuse import robust
+from armtrack_cli.fuse import arm_smoother, robust
 from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.settings import FuseSettings
 
@@ -24,6 +24,8 @@ class Inputs:
     steps: Steps
     z: np.ndarray  # (n_frames, 2) px, NaN where the patch was not detected
     q_WB: np.ndarray  # (n_frames, 4)
+    t: np.ndarray | None = None  # (n_frames,) s, the frames' times (arm-smoother)
+    imu: arm_smoother.ImuSamples | None = None  # the IMU samples themselves (arm-smoother)
 
 
 @dataclass(frozen=True)
@@ -32,6 +34,9 @@ class Estimates:
     cov: np.ndarray  # (n_frames, 6, 6)
     ess: np.ndarray | None  # (n_frames,) particle filters only
     codes: np.ndarray | None = None  # (n_frames,) what became of each detection (robust.USED…)
+    q_WB: np.ndarray | None = None  # (n_frames, 4) orientation corrected by the method, if any
+    elbow_cov: np.ndarray | None = None  # (n_frames, 3, 3) where the method estimates it
+    summary: dict | None = None  # what the method adds to fuse's summary
 
     @property
     def sd(self) -> np.ndarray:
@@ -132,8 +137,10 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     Particles are an (N, 6) array. After every resampling the weights are equal, so each
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
-    reference, to round-off (tests/test_fuse_filters.py)."""
-    rng = np.random.default_rng(s.seed)
+    reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py)."""
+    from armtrack_cli.filters import sfc64  # numba's: imported only when a particle filter runs
+
+    rng = sfc64.generator(s.seed)  # numpy's SFC64, which the kernel draws from inline
     N = s.particles
     x = rng.multivariate_normal(x0, P0, size=N)
     n_frames = inp.z.shape[0]
@@ -151,7 +158,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     ace = inp.steps.noise_factors()
     seen = np.isfinite(inp.z).all(axis=1)
     for k in range(n_frames):
-        eps = rng.standard_normal((N, 12))
+        eps = rng.standard_normal((N, 12 if constrained else 6))
         if k > 0:  # step 1: particle prediction from p¹ (eq. 10)
             x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
         if seen[k]:  # step 2: weights from the colour-tracking likelihood (eq. 11), gated
@@ -214,6 +221,7 @@ def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
 def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
                             constrained: bool, points: np.ndarray) -> Estimates:
+    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import pf_kernel
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
@@ -221,11 +229,13 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator
     cam, dist = _camera_arrays(proj)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
+    state = sfc64.get_state(rng)
     mean, cov, n_eff, codes = pf_kernel.run(
-        _f64(x), rng, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
+        _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
         float(s.pf_resample_ess), _guard(s, points))
+    sfc64.set_state(rng, state)
     return Estimates(mean, cov, n_eff, codes)
 
 
@@ -241,8 +251,18 @@ def load_kernels(method: str) -> None:
     """Load ``method``'s compiled kernel (numba's set-up and its cache, about half a second
     once per process; a compile, once per install) by running it on a two-frame problem, so
     that a caller timing ``run`` times the filter only."""
-    if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint"):
+    if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint", "arm-smoother"):
         return
+    if method == "arm-smoother":
+        from armtrack_cli.fuse.smoother_kernel import smooth as smoother_pass
+
+        d, n = 12, 2
+        e = np.tile(np.eye(d), (n, 1, 1))
+        smoother_pass(np.zeros(d), np.eye(d), e, np.zeros((n, d)), e, np.zeros((n, 2, d)),
+                      np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
+                      np.ones(n, bool), 1.0, 13.8)
+        method = "pf-constraint"
+    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
     z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
@@ -254,9 +274,9 @@ def load_kernels(method: str) -> None:
                             gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0, 13.8, 10,
                             np.zeros(6))
     else:
-        pf_kernel.run(np.zeros((10, 6)), np.random.default_rng(0), z, q, d3, d3, d3, d3, cam,
-                      dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0, 1.0,
-                      _guard(FuseSettings(particles=10), np.zeros((2, 2, 3))))
+        pf_kernel.run(np.zeros((10, 6)), sfc64.get_state(sfc64.generator(0)), z, q, d3, d3, d3,
+                      d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
+                      1.0, _guard(FuseSettings(particles=10), np.zeros((2, 2, 3))))
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
@@ -265,10 +285,13 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         est = run_gaussian(inp, x0, P0, proj, s, method)
     elif method == "pf":
         est = run_particles(inp, x0, P0, proj, s, arm, constrained=False)
-    elif method == "pf-constraint":
+    elif method in ("pf-constraint", "arm-smoother"):
         if arm is None:
-            raise ValueError("pf-constraint needs the arm model")
+            raise ValueError(f"{method} needs the arm model")
         est = run_particles(inp, x0, P0, proj, s, arm, constrained=True)
+        if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
+            return run_arm_smoother(inp, x0, P0, proj, s, arm,
+                                    smooth(est, inp, s, "pf-constraint").mean)
     else:
         raise ValueError(f"unknown method {method!r}")
     if s.smoother == "rts":
@@ -276,14 +299,38 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
     return est
 
 
+def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+                     s: FuseSettings, arm: Arm, first: np.ndarray) -> Estimates:
+    """The orientation-aware arm smoother (fuse/arm_smoother.py) from the first pass ``first``
+    (n_frames, 6); its (p, v) block as every method's, the rest in the summary."""
+    if inp.imu is None or inp.t is None:
+        raise ValueError("arm-smoother needs the IMU samples and the frame times in its inputs")
+    r = arm_smoother.run(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0, proj, s, arm)
+    th = r.x[:, arm_smoother.TH]
+    summary = {"detections_gated": int(r.gated.sum()), "smoother_iterations": r.iterations,
+               "accel_bias_m_s2": [round(float(v), 4) for v in r.x[-1, arm_smoother.BA]],
+               "orientation_error_rms_deg": round(float(np.degrees(
+                   np.sqrt(np.mean(np.sum(th**2, axis=1))))), 3)}
+    if s.shoulder == "drifting":
+        sh = r.x[:, arm_smoother.SH]
+        summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
+        summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
+            sh - arm.shoulder, axis=1).max()), 4)
+    return Estimates(r.x[:, :6], r.P[:, :6, :6], None, q_WB=r.q_WB, elbow_cov=r.elbow_cov,
+                     summary=summary)
+
+
 def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimates:
     """Offline: each frame's estimate also uses every later detection. The filtered Gaussian
     (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
     through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
     to the process noise of each step."""
-    F, b, Q = inp.steps.stacked()
-    if method == "pf-constraint":
-        Q = Q + np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2)
-    Q += 1e-12 * np.eye(6)
-    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), F, b, Q)
-    return Estimates(x, P, est.ess)
+    walk = np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2) \
+        if method == "pf-constraint" else 0.0
+
+    def steps(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        F, b, Q = inp.steps.stacked(lo, hi)  # a block at a time: memory flat with the length
+        return F, b, Q + walk + 1e-12 * np.eye(6)
+
+    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), steps=steps)
+    return Estimates(x, P, est.ess, est.codes)

@@ -49,15 +49,16 @@ class Steps:
         blk = self.q * np.array([[d**3 / 3, d**2 / 2], [d**2 / 2, d]])
         return np.kron(blk, np.eye(3))
 
-    def stacked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """F (n_frames, 6, 6), b (n_frames, 6), Q (n_frames, 6, 6): F(k), b(k), Q(k) for every
-        frame at once (the same arithmetic, so the same numbers)."""
-        d = self.dt
+    def stacked(self, lo: int = 0, hi: int | None = None) -> tuple[np.ndarray, np.ndarray,
+                                                                   np.ndarray]:
+        """F (n, 6, 6), b (n, 6), Q (n, 6, 6): F(k), b(k), Q(k) for frames k in [lo, hi) (all by
+        default) at once (the same arithmetic, so the same numbers)."""
+        d = self.dt[lo:hi]
         n_frames = d.size
         F = np.tile(np.eye(6), (n_frames, 1, 1))
         idx = np.arange(3)
         F[:, idx, 3 + idx] = d[:, None]
-        b = np.hstack([self.dp, self.dv])
+        b = np.hstack([self.dp[lo:hi], self.dv[lo:hi]])
         # Δ³ and Δ² by C's pow per element, as the scalar Δ**3 of Q(k) (numpy's array power
         # rounds differently)
         d3 = np.fromiter((v**3 for v in d.tolist()), float, n_frames)

@@ -1,13 +1,19 @@
 """The particle filters of ``methods.run_particles`` compiled with numba: the same steps, in
 the same order, drawing the same random numbers from the same generator.
 
-numba draws from a ``np.random.Generator`` with numpy's own algorithms and advances the
-generator's state, so for one seed the kernel and the numpy reference see identical draws
-(eps (N, 12) per frame, then the resampling uniforms); they differ only by the order of
-floating-point sums (tests/test_pf_kernel.py holds them equal to 1e-12). ``cache=True``: the
-compile happens once per install and is loaded from ``__pycache__`` afterwards.
+The generator is numpy's SFC64, drawn inline (filters/sfc64.py) from its state (4,) uint64, so
+for one seed the kernel and the numpy reference see identical draws (eps (N, 12) per frame,
+(N, 6) for the plain PF, then the resampling uniforms); they differ only by the order of
+floating-point sums (tests/test_fuse_filters.py holds them equal to 1e-12). Every work array
+is allocated once per run. ``cache=True``: the compile happens once per install and is loaded
+from ``__pycache__`` afterwards.
 
-Shapes: particles x (N, 6) = (p, v) in W (m, m/s); z (n_frames, 2) px, NaN = no detection.
+Shapes: particles x (N, 6) = (p, v) in W (m, m/s), held inside as its transpose xs (6, N) so
+that every pass over the particles runs along contiguous rows (SIMD); the normals likewise as
+eps (12, N), filled in the reference's draw order; z (n_frames, 2) px, NaN = no detection.
+The gate, roughening and re-seeding of fuse/robust.py draw their normals after eps, in the
+reference's order too (tests/test_gating.py holds kernel and reference equal with them active).
+The resampling schemes are in fuse/pf_resample_kernel.py.
 """
 
 from __future__ import annotations
@@ -15,125 +21,92 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-RESAMPLING = {"residual": 0, "systematic": 1, "stratified": 2, "multinomial": 3}
+from armtrack_cli.filters.sfc64 import fill_normals
+from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
+
+__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
+
+# error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
+# whose check keeps LLVM from vectorising any loop that divides
+
+# exp(x) for x ≤ 0 in SIMD: x = n ln2 + r, |r| ≤ ln2 / 2 (Cody & Waite's two-part ln2), e^r by
+# its Taylor series to r¹³ (truncation < 5e-18), 2^n from a table; within 1 ulp of np.exp
+# (tests/test_fuse_filters.py), where libm's exp, one call per particle, is 3× slower.
+_LN2_HI, _LN2_LO, _LOG2E = 6.93147180369123816490e-01, 1.90821492927058770002e-10, 1 / np.log(2)
+_EXP_C = 1.0 / np.cumprod(np.r_[1.0, np.arange(1.0, 14.0)])  # 1 / j!, j = 0 … 13
+_POW2 = 2.0 ** -np.arange(1076.0)  # 2^-n, n = 0 … 1075 (2^-1075 rounds to 0)
 
 
-@njit(cache=True)
-def _search_sorted_keys(cdf, u, idx, start):
-    """idx[start + j] = min(#{cdf ≤ u_j}, N − 1) for sorted u: searchsorted(side="right")
-    by one merge walk."""
-    n, i = cdf.size, 0
-    for j in range(u.size):
-        while i < n and cdf[i] <= u[j]:
-            i += 1
-        idx[start + j] = min(i, n - 1)
+@njit(cache=True, error_model="numpy")
+def exp_nonpositive(x, m, out):
+    """out = exp(x − m) for x (n,) ≤ m (NaN stays NaN; below −745, where exp is 0, 0); out
+    must not be x (the loop is vectorised only for distinct arrays)."""
+    for i in range(x.size):
+        v = x[i] - m
+        v = max(v, -745.0) if v == v else v
+        n = np.rint(v * _LOG2E)
+        r = (v - n * _LN2_HI) - n * _LN2_LO
+        p = _EXP_C[13]
+        for j in range(12, -1, -1):
+            p = p * r + _EXP_C[j]
+        out[i] = p * _POW2[np.intp(-n)] if v == v else v
 
 
-@njit(cache=True)
-def _sorted_uniforms(rng, k):
-    """np.sort(rng.random(k)) by bucket sort, O(k) for uniforms: the same array, faster."""
-    u = rng.random(k)
-    start = np.zeros(k + 1, np.int64)
-    for v in u:
-        start[int(v * k) + 1] += 1
-    for b in range(k):
-        start[b + 1] += start[b]
-    out = np.empty(k)
-    for v in u:
-        b = int(v * k)
-        out[start[b]] = v
-        start[b] += 1
-    for i in range(1, k):  # insertion sort: out of order only within a bucket
-        v, j = out[i], i - 1
-        while j >= 0 and out[j] > v:
-            out[j + 1] = out[j]
-            j -= 1
-        out[j + 1] = v
-    return out
-
-
-@njit(cache=True)
-def _resample(w, rng, scheme, idx):
-    """Ancestor indices into idx (N,), as filters/resampling.py, drawing the same uniforms."""
-    n = w.size
-    if scheme == 0:  # residual: floor(N w_i) copies, then R leftovers (Liu & Chen 1998)
-        nw = n * (w / w.sum())
-        m = 0
-        for i in range(n):
-            c = np.int64(nw[i])
-            for _ in range(c):
-                idx[m] = i
-                m += 1
-        k = n - m
-        if k == 0:
-            return
-        cdf = np.cumsum(nw - np.floor(nw))
-        u = _sorted_uniforms(rng, k) * cdf[-1]
-        _search_sorted_keys(cdf, u, idx, m)
-        return
-    c = np.cumsum(w)
-    cdf = c / c[-1]
-    if scheme == 1:  # systematic: one offset for N evenly spaced points
-        u = (np.arange(n) + rng.random()) / n
-    elif scheme == 2:  # stratified: one uniform in each of N strata
-        u = (np.arange(n) + rng.random(n)) / n
-    else:  # multinomial, sorted draws
-        u = _sorted_uniforms(rng, n)
-    _search_sorted_keys(cdf, u, idx, 0)
-
-
-@njit(cache=True)
-def _take(x, idx, out):
-    """out = x[idx] (the resampled particles)."""
-    for i in range(idx.size):
-        for j in range(x.shape[1]):
-            out[i, j] = x[idx[i], j]
-
-
-@njit(cache=True)
-def _normalise(lw, w):
-    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form); uniform if every lw = −inf."""
-    m = lw.max()
+@njit(cache=True, error_model="numpy")
+def _max(lw):
+    """max(lw) by four running maxima (no chain of dependent compares); a NaN in lw either
+    makes it NaN or is caught by the sum in _normalise."""
+    m0 = m1 = m2 = m3 = -np.inf
     n = lw.size
-    if not np.isfinite(m):
-        w[:] = 1.0 / n
-        return
-    s = 0.0
-    for i in range(n):
-        w[i] = np.exp(lw[i] - m)
-        s += w[i]
-    for i in range(n):
-        w[i] /= s
+    for i in range(0, n - 3, 4):
+        m0, m1, m2, m3 = max(m0, lw[i]), max(m1, lw[i + 1]), max(m2, lw[i + 2]), max(m3, lw[i + 3])
+    for i in range(n - n % 4, n):
+        m0 = max(m0, lw[i])
+    return max(max(m0, m1), max(m2, m3))
 
 
-@njit(cache=True)
-def _moments(x, w, mean, cov):
+@njit(cache=True, error_model="numpy")
+def _normalise(lw, w):
+    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form); uniform if every lw = −inf, or
+    if one is NaN (as the reference, whose max is then NaN)."""
+    m = _max(lw)
+    n = lw.size
+    if np.isfinite(m):
+        exp_nonpositive(lw, m, w)
+        s = _total(w)
+        if np.isfinite(s):
+            for i in range(n):
+                w[i] /= s
+            return
+    w[:] = 1.0 / n
+
+
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _moments(xs, w, mean, cov, d):
     """Weighted mean Σ w_i x_i (6,) and covariance Σ w_i d_i d_iᵀ (6, 6), d_i = x_i − mean,
-    into mean, cov (as particles.moments; plain loops, so one core and no BLAS threads)."""
-    n, dim = x.shape
-    m = np.zeros(dim)
-    for i in range(n):
-        for a in range(dim):
-            m[a] += w[i] * x[i, a]
-    c = np.zeros((dim, dim))
-    d = np.empty(dim)
-    for i in range(n):
-        for a in range(dim):
-            d[a] = x[i, a] - m[a]
-        for a in range(dim):
-            wa = w[i] * d[a]
-            for b in range(a, dim):
-                c[a, b] += wa * d[b]
-    mean[:] = m
-    for a in range(dim):
-        for b in range(a, dim):
-            cov[a, b] = cov[b, a] = c[a, b]
+    into mean, cov (as particles.moments; plain loops, so one core and no BLAS threads);
+    d (6, N) work."""
+    n = w.size
+    for a in range(6):
+        m = 0.0
+        for i in range(n):
+            m += w[i] * xs[a, i]
+        mean[a] = m
+        for i in range(n):
+            d[a, i] = xs[a, i] - m
+    for a in range(6):
+        for b in range(a, 6):
+            c = 0.0
+            for i in range(n):
+                c += w[i] * d[a, i] * d[b, i]
+            cov[a, b] = cov[b, a] = c
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _pixel(p0, p1, p2, cam, dist):
     """π(p): OpenCV's pinhole with k1 k2 p1 p2 k3 (models.Projection) at one point in W;
-    cam = (R (3, 3) row-major, T, fx, fy, cx, cy) flattened (16,)."""
+    cam = (R (3, 3) row-major, T, fx, fy, cx, cy) flattened (16,), dist (5,): arrays, or
+    tuples (held in registers through a loop over particles)."""
     k1, k2, t1, t2, k3 = dist[0], dist[1], dist[2], dist[3], dist[4]
     X = cam[0] * p0 + cam[1] * p1 + cam[2] * p2 + cam[9]
     Y = cam[3] * p0 + cam[4] * p1 + cam[5] * p2 + cam[10]
@@ -149,62 +122,76 @@ def _pixel(p0, p1, p2, cam, dist):
     return dx * cam[12] + cam[14], dy * cam[13] + cam[15]
 
 
-@njit(cache=True)
-def _predict_and_weigh(x, rng, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uniform,
-                       walk_eps, lw):
-    """One pass over the particles: draw their 12 standard normals (the reference's eps row),
-    keep the last 6 for the walk layer; step 1, x_k ~ N(F x + b, Q) (eq. 10) with Q = L Lᵀ ⊗ I₃;
-    step 2, lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11) if z is seen."""
-    seen = np.isfinite(z[0]) and np.isfinite(z[1])
+@njit(cache=True, error_model="numpy")
+def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uniform, lw, px):
+    """Step 1, x_k ~ N(F x + b, Q) (eq. 10) with Q = L Lᵀ ⊗ I₃ from eps rows 0-5; step 2,
+    lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11) if z is seen, the pixels π(p_i) kept in
+    px (2, N) for the gate. Returns whether z is seen."""
     a, c, e = ace[k, 0], ace[k, 1], ace[k, 2]
-    log_w0 = np.log(w[0])  # a uniform prior: one log for all
-    eps = np.empty(6)
-    for i in range(x.shape[0]):
-        for j in range(6):
-            eps[j] = rng.standard_normal()
-        for j in range(6):
-            walk_eps[i, j] = rng.standard_normal()
-        if k > 0:
-            for j in range(3):
-                p, v = x[i, j], x[i, 3 + j]
-                x[i, j] = p + v * dt[k] + dp[k, j] + a * eps[j]
-                x[i, 3 + j] = v + dv[k, j] + c * eps[j] + e * eps[3 + j]
-        if seen:
-            u, v = _pixel(x[i, 0], x[i, 1], x[i, 2], cam, dist)
-            eu, ev = u - z[0], v - z[1]
-            lw[i] = -inv2s2 * (eu * eu + ev * ev) + (log_w0 if uniform else np.log(w[i]))
-    return seen
-
-
-@njit(cache=True)
-def _walk_and_constrain(x, walk_eps, walk, centre, L1, inv2c2, lw):
-    """Step 4, the random-walk layer p² (eqs. 17, 18); step 5, lw_i = −r_i² / 2σ² with
-    r_i = |p_i − centre| − L1 (eq. 15 on the upper-arm length, see methods.py)."""
-    for i in range(x.shape[0]):
-        s = 0.0
-        for j in range(6):
-            x[i, j] = x[i, j] + walk_eps[i, j] * walk[j]
+    n = xs.shape[1]
+    if k > 0:
         for j in range(3):
-            d = x[i, j] - centre[j]
-            s += d * d
-        r = np.sqrt(s) - L1
+            dtk, dpj, dvj = dt[k], dp[k, j], dv[k, j]
+            for i in range(n):
+                p, v = xs[j, i], xs[3 + j, i]
+                xs[j, i] = p + v * dtk + dpj + a * eps[j, i]
+                xs[3 + j, i] = v + dvj + c * eps[j, i] + e * eps[3 + j, i]
+    if not (np.isfinite(z[0]) and np.isfinite(z[1])):
+        return False
+    ct, dt5, z0, z1 = _camera_tuple(cam), _dist_tuple(dist), z[0], z[1]  # in registers
+    for i in range(n):
+        u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
+        px[0, i], px[1, i] = u, v
+        eu, ev = u - z0, v - z1
+        lw[i] = -inv2s2 * (eu * eu + ev * ev)
+    if uniform:  # a uniform prior: one log for all
+        log_w0 = np.log(w[0])
+        for i in range(n):
+            lw[i] += log_w0
+    else:
+        for i in range(n):
+            lw[i] += np.log(w[i])
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _camera_tuple(c):
+    return (c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11], c[12],
+            c[13], c[14], c[15])
+
+
+@njit(cache=True, error_model="numpy")
+def _dist_tuple(d):
+    return d[0], d[1], d[2], d[3], d[4]
+
+
+@njit(cache=True, error_model="numpy")
+def _walk_and_constrain(xs, eps, walk, centre, L1, inv2c2, lw):
+    """Step 4, the random-walk layer p² (eqs. 17, 18) from eps rows 6-11; step 5,
+    lw_i = −r_i² / 2σ² with r_i = |p_i − centre| − L1 (eq. 15 on the upper-arm length, see
+    methods.py)."""
+    n = xs.shape[1]
+    for j in range(6):
+        for i in range(n):
+            xs[j, i] = xs[j, i] + eps[6 + j, i] * walk[j]
+    for i in range(n):
+        d0, d1, d2 = xs[0, i] - centre[0], xs[1, i] - centre[1], xs[2, i] - centre[2]
+        r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - L1
         lw[i] = -inv2c2 * r * r
 
 
-@njit(cache=True)
-def _pixel_mahalanobis2(x, w, z, cam, dist, r2):
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _pixel_mahalanobis2(px, w, z, r2):
     """robust.pixel_mahalanobis2: νᵀ S⁻¹ ν with ẑ = Σ wᵢ π(pᵢ), ν = z − ẑ,
-    S = Σ wᵢ (π(pᵢ) − ẑ)(π(pᵢ) − ẑ)ᵀ + r2 I."""
-    n = x.shape[0]
-    px = np.empty((n, 2))
+    S = Σ wᵢ (π(pᵢ) − ẑ)(π(pᵢ) − ẑ)ᵀ + r2 I; px (2, N) the particles' pixels."""
+    n = w.size
     mu, mv = 0.0, 0.0
     for i in range(n):
-        px[i, 0], px[i, 1] = _pixel(x[i, 0], x[i, 1], x[i, 2], cam, dist)
-        mu += w[i] * px[i, 0]
-        mv += w[i] * px[i, 1]
+        mu += w[i] * px[0, i]
+        mv += w[i] * px[1, i]
     suu, suv, svv = r2, 0.0, r2
     for i in range(n):
-        du, dv = px[i, 0] - mu, px[i, 1] - mv
+        du, dv = px[0, i] - mu, px[1, i] - mv
         suu += w[i] * du * du
         suv += w[i] * du * dv
         svv += w[i] * dv * dv
@@ -212,115 +199,140 @@ def _pixel_mahalanobis2(x, w, z, cam, dist, r2):
     return (a * (svv * a - suv * b) + b * (suu * b - suv * a)) / (suu * svv - suv * suv)
 
 
-@njit(cache=True)
-def _reseed(x, w_prior, points, n_seed, sigma, prior_m, rng):
+@njit(cache=True, error_model="numpy")
+def _reseed(xs, w_prior, points, sigma, prior_m, state, seed_eps, m, c, d):
     """robust.branch_split and robust.reseed: particles 0..n0−1 onto points[0], the rest of
-    the n_seed onto points[1], ± sigma; n0 from the predicted cloud's density at the two."""
-    m = np.empty(6)
-    c = np.empty((6, 6))
-    _moments(x, w_prior, m, c)
+    the n_seed = seed_eps.shape[1] onto points[1], ± sigma; n0 from the predicted cloud's
+    density at the two. seed_eps (3, n_seed), m (6,), c (6, 6), d (6, N) work."""
+    n_seed = seed_eps.shape[1]
+    _moments(xs, w_prior, m, c, d)
     C = c[:3, :3] + prior_m**2 * np.eye(3)
     q = np.empty(2)
     for b in range(2):
-        d = points[b] - m[:3]
-        q[b] = d @ np.linalg.solve(C, d)
+        v = points[b] - m[:3]
+        q[b] = v @ np.linalg.solve(C, v)
     p0 = 1.0 / (1.0 + np.exp(min(0.5 * (q[0] - q[1]), 700.0)))
     n0 = int(np.floor(n_seed * p0 + 0.5))
-    for i in range(n_seed):
-        b = 0 if i < n0 else 1
-        for j in range(3):
-            x[i, j] = points[b, j] + sigma * rng.standard_normal()
+    fill_normals(state, seed_eps.T)  # the reference's (n_seed, 3), row by row
+    for j in range(3):
+        for i in range(n_seed):
+            xs[j, i] = points[0 if i < n0 else 1, j] + sigma * seed_eps[j, i]
 
 
-@njit(cache=True)
-def _colour_loglik(x, z, inv2s2, cam, dist, w_prior, lw):
+@njit(cache=True, error_model="numpy")
+def _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw):
     """lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11), as in _predict_and_weigh."""
-    for i in range(x.shape[0]):
-        u, v = _pixel(x[i, 0], x[i, 1], x[i, 2], cam, dist)
+    ct, dt5 = _camera_tuple(cam), _dist_tuple(dist)
+    for i in range(xs.shape[1]):
+        u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
         eu, ev = u - z[0], v - z[1]
         lw[i] = -inv2s2 * (eu * eu + ev * ev) + np.log(w_prior[i])
 
 
-@njit(cache=True)
-def _gate_code(d2, limit, run_gated, reacquire):
+@njit(cache=True, error_model="numpy")
+def _gate_code(d2, gate, run_gated, reacquire):
     """robust.gate: (code, run) — 1 used, 2 gated, 3 re-acquired (then a grace, run < 0)."""
     if run_gated < 0:
         return 1, run_gated + 1
-    if d2 <= limit:
+    if gate <= 0 or d2 <= gate:
         return 1, 0
     if run_gated < reacquire:
         return 2, run_gated + 1
     return 3, -reacquire
 
 
-@njit(cache=True)
-def _roughen(x, sd, rng):
-    """robust.roughen: x_ij ± sd_j for every particle (the re-acquisition's spread)."""
-    for i in range(x.shape[0]):
-        for j in range(6):
-            x[i, j] += sd[j] * rng.standard_normal()
+@njit(cache=True, error_model="numpy")
+def _roughen(xs, sd, state, eps):
+    """robust.roughen: x_ij ± sd_j for every particle (the re-acquisition's spread); eps (6, N)
+    work, filled as the reference's (N, 6)."""
+    fill_normals(state, eps.T)
+    for j in range(6):
+        for i in range(xs.shape[1]):
+            xs[j, i] += sd[j] * eps[j, i]
 
 
-@njit(cache=True)
-def run(x, rng, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
+@njit(cache=True, error_model="numpy")
+def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_gated, guard,
+                    constrained, w_prior, xr, seed_eps, m6, c6):
+    """methods.run_particles' step 2 after the gate (fuse/robust.py): the χ² gate on the
+    predicted pixels px, then (unless gated) w ∝ w⁻ p(z | x), roughened first if it
+    re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated)."""
+    points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
+    codes[k], run_gated = _gate_code(_pixel_mahalanobis2(px, w, z, r2), gate, run_gated,
+                                     reacquire)
+    if codes[k] == 2:
+        return False, run_gated
+    w_prior[:] = w
+    if codes[k] == 3:  # re-acquired: spread the cloud first (xr: work)
+        _roughen(xs, rough, state, xr)
+        _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
+    _normalise(lw, w)
+    N = w.size
+    if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / _sum_sq(w) < reseed_ess * N):
+        _reseed(xs, w_prior, points[k], reseed_sigma, prior_m, state, seed_eps, m6, c6, xr)
+        codes[k] = 4 if codes[k] == 1 else codes[k]
+        _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
+        _normalise(lw, w)
+    return True, run_gated
+
+
+@njit(cache=True, error_model="numpy")
+def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
         constrained, scheme, resample_ess, guard):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
-    (eqs. 12-14). x (N, 6) the initial particles (overwritten); ``guard`` = (points
-    (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough
-    (6,)): the
-    gate and the re-seeding of fuse/robust.py. Returns mean (n_frames, 6), cov
-    (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
-    points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
+    (eqs. 12-14). x (N, 6) the initial particles; state (4,) the SFC64 state (advanced);
+    ``guard`` = (points (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess,
+    reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py.
+    Returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
     n_frames, N = z.shape[0], x.shape[0]
     mean = np.empty((n_frames, 6))
     cov = np.empty((n_frames, 6, 6))
     n_eff = np.empty(n_frames)
+    xs, xr = np.ascontiguousarray(x.T), np.empty((6, N))
+    w, lw = np.full(N, 1.0 / N), np.empty(N)
+    eps = np.empty((12 if constrained else 6, N))
     codes = np.zeros(n_frames, np.int8)
-    w = np.full(N, 1.0 / N)
-    w_prior = np.empty(N)
-    lw = np.empty(N)
-    walk_eps = np.empty((N, 6))
+    w_prior, px = np.empty(N), np.empty((2, N))
+    seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
     idx = np.empty(N, np.int64)
-    xr = np.empty_like(x)
+    work, start = np.empty((3, N)), np.empty(N + 1, np.int64)
     uniform = True  # every w_i is exactly 1/N
-    limit = gate if gate > 0 else np.inf
     run_gated = 0
     for k in range(n_frames):
-        seen = _predict_and_weigh(x, rng, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
-                                  uniform, walk_eps, lw)
-        if seen:  # the χ² gate
-            codes[k], run_gated = _gate_code(_pixel_mahalanobis2(x, w, z[k], cam, dist, r2),
-                                             limit, run_gated, reacquire)
-            seen = codes[k] != 2
+        fill_normals(state, eps.T)  # the reference's eps (N, 12), row by row
+        seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
+                                  uniform, lw, px)
+        if seen:  # the χ² gate, roughening and re-seeding
+            seen, run_gated = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw, px,
+                                              codes, run_gated, guard, constrained, w_prior,
+                                              xr, seed_eps, m6, c6)
         if seen:
-            w_prior[:] = w
-            if codes[k] == 3:  # re-acquired: spread the cloud first
-                _roughen(x, rough, rng)
-                _colour_loglik(x, z[k], inv2s2, cam, dist, w_prior, lw)
-            _normalise(lw, w)
-            if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / (w @ w) < reseed_ess * N):
-                _reseed(x, w_prior, points[k], n_seed, reseed_sigma, prior_m, rng)
-                codes[k] = 4 if codes[k] == 1 else codes[k]
-                _colour_loglik(x, z[k], inv2s2, cam, dist, w_prior, lw)
-                _normalise(lw, w)
             uniform = False
-        n_eff[k] = 1.0 / (w @ w)
+        n_eff[k] = 1.0 / _sum_sq(w)
         if constrained:
             if seen:  # step 3 (without a detection the weights are still equal)
-                _resample(w, rng, scheme, idx)
-                _take(x, idx, xr)
-                x, xr = xr, x
-            _walk_and_constrain(x, walk_eps, walk, centres[k], L1, inv2c2, lw)  # steps 4, 5
+                _resample(w, state, scheme, idx, work, start)
+                _take(xs, idx, xr)
+                xs, xr = xr, xs
+            _walk_and_constrain(xs, eps, walk, centres[k], L1, inv2c2, lw)  # steps 4, 5
             _normalise(lw, w)
-            _moments(x, w, mean[k], cov[k])
-            _resample(w, rng, scheme, idx)  # step 6
+            _moments(xs, w, mean[k], cov[k], xr)
+            _resample(w, state, scheme, idx, work, start)  # step 6
         else:
-            _moments(x, w, mean[k], cov[k])
+            _moments(xs, w, mean[k], cov[k], xr)
             if n_eff[k] >= resample_ess * N:
                 continue
-            _resample(w, rng, scheme, idx)
-        _take(x, idx, xr)
-        x, xr = xr, x
+            _resample(w, state, scheme, idx, work, start)
+        _take(xs, idx, xr)
+        xs, xr = xr, xs
         w[:] = 1.0 / N
         uniform = True
     return mean, cov, n_eff, codes
+
+
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _sum_sq(w):
+    s = 0.0
+    for v in w:
+        s += v * v
+    return s

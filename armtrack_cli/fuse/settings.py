@@ -9,6 +9,8 @@ from armtrack_cli.core.methods import BUILT as METHODS
 from armtrack_cli.core.methods import DEFAULT_METHOD
 
 SMOOTHERS = ("rts", "none")
+SHOULDERS = ("fixed", "drifting")
+HOLDS = ("linear", "sample")  # fuse/imu_fold.py
 
 
 @dataclass(frozen=True)
@@ -32,7 +34,8 @@ class FuseSettings:
     ukf_beta: float = 2.0
     ukf_kappa: float = 0.0
     gate_chi2: float = 13.8  # χ²(2) at 99.9 %: a detection whose innovation Mahalanobis²
-    #                         exceeds it is not used (counted as gated); 0 turns gating off
+    #                         exceeds it is not used (counted as gated); 0 turns gating off.
+    #                         Every method's camera update, arm-smoother's included
     reacquire_frames: int = 10  # this many gated detections in a row and the next one is used
     #                             anyway, the filter re-acquired (fuse/robust.py says how)
     reacquire_sigma_m: float = 0.10  # Gaussian filters: position SD added on re-acquiring
@@ -45,6 +48,20 @@ class FuseSettings:
     smoother: str = "rts"  # offline fixed-interval smoothing of the filtered estimates; the
     #                        tao2008-* recipes set "none" to reproduce the paper's filters
     seed: int = 0
+    # the orientation-aware arm smoother (method arm-smoother, fuse/arm_smoother.py)
+    smoother_accel_noise: float = 0.1  # m/s² per IMU sample: what is left of the IMU's error
+    #                                    once its orientation error and bias are estimated
+    orientation_sd_deg: float = 2.5  # per axis, the IMU orientation error's SD: wider than an
+    #                                MTw's ~1° (0.6° per axis), measured best (docs/fusion.md)
+    heading_sd_deg: float = 2.5  # … and about the vertical (heading), seen only by the arm
+    orientation_tau_s: float = 2.0  # its correlation time (first-order Gauss–Markov)
+    accel_bias_sd: float = 0.05  # m/s² per axis, prior of the accelerometer bias
+    accel_bias_walk: float = 0.001  # m/s²/√s, its random walk
+    imu_hold: str = "linear"  # IMU between samples: "linear" (first-order hold) or "sample"
+    smoother_iterations: int = 10  # Gauss–Newton iterations at most
+    shoulder: str = "fixed"  # "fixed" (Tao & Hu) or "drifting": a shoulder state that wanders
+    shoulder_sd_m: float = 0.03  # … by about this much (per axis) about the declared shoulder
+    shoulder_tau_s: float = 5.0  # … with this correlation time
 
 
 def checked(s: FuseSettings, where: str) -> FuseSettings:
@@ -66,6 +83,13 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
         raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_* are out of range",
                           "gate_chi2 ≥ 0 (0: off), reacquire_frames ≥ 1, 0 ≤ reseed_share ≤ 1, "
                           "reseed_ess, reseed_sigma_m, reseed_prior_m ≥ 0")
+    for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS)):
+        if value not in valid:
+            raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",
+                              did_you_mean(value, valid, what="choices"))
+    if s.smoother_iterations < 1:
+        raise ConfigError(where, f"[fuse] smoother_iterations = {s.smoother_iterations} is too "
+                          "few", "use 1 or more")
     if s.particles < 10:
         raise ConfigError(where, f"[fuse] particles = {s.particles} is too few", "use 10 or more")
     return s

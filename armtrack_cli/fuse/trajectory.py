@@ -22,7 +22,7 @@ def trajectory_table(t_frames: np.ndarray, frames: np.ndarray, est: Estimates, i
         cols[f"wrist_{a}"] = mean[:, k]
     if arm is not None:
         q = full(inp.q_WB)
-        q[frames] = inp.q_WB
+        q[frames] = inp.q_WB if est.q_WB is None else est.q_WB  # as the method corrected it
         elbow = arm.elbow(mean[:, :3], q)  # Tao & Hu eq. 2
         for k, a in enumerate("xyz"):
             cols[f"elbow_{a}"] = elbow[:, k]
@@ -30,9 +30,13 @@ def trajectory_table(t_frames: np.ndarray, frames: np.ndarray, est: Estimates, i
         cols[f"wrist_v{a}"] = mean[:, 3 + k]
     for k, a in enumerate("xyz"):
         cols[f"wrist_{a}_sd"] = sd[:, k]
-    if arm is not None:  # the elbow is the wrist moved by a known vector: the same spread
+    if arm is not None:  # the elbow is the wrist moved by a known vector: the same spread,
+        esd = sd[:, :3]  # unless the method estimates the orientation too
+        if est.elbow_cov is not None:
+            esd = full(est.sd[:, :3])
+            esd[frames] = np.sqrt(np.maximum(np.diagonal(est.elbow_cov, axis1=1, axis2=2), 0))
         for k, a in enumerate("xyz"):
-            cols[f"elbow_{a}_sd"] = sd[:, k]
+            cols[f"elbow_{a}_sd"] = esd[:, k]
     for k, a in enumerate("xyz"):
         cols[f"wrist_v{a}_sd"] = sd[:, 3 + k]
     if est.ess is not None:

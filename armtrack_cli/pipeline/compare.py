@@ -27,7 +27,7 @@ AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
 CHECK_SEARCH_S = 1.0  # a declared offset is checked within ±1 s of itself
 
 
-SYNC_PREFERENCE = ("pf-constraint", "ukf", "pf", "ekf", "inertial")  # best-tracking first
+SYNC_PREFERENCE = ("arm-smoother", "pf-constraint", "ukf", "pf", "ekf", "inertial")  # best-tracking first
 
 
 def synchronised_truth(session: Session, trajs: dict) -> tuple[Truth, dict]:

@@ -14,8 +14,9 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
-from armtrack_cli.core.methods import DEFAULT_FOR_KIND, PALM_METHODS
+from armtrack_cli.core.methods import DEFAULT_FOR_KIND, NEEDS, PALM_METHODS
 from armtrack_cli.fuse import models, robust
+from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
@@ -85,9 +86,9 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     if session.arm is not None:
         arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
                          L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
-    return Prepared(t_f, frames, Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu,
-                                                                            t_f[frames])),
-                    models.Projection(cam), arm)
+    inputs = Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu, t_f[frames]),
+                    t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc[ok]))
+    return Prepared(t_f, frames, inputs, models.Projection(cam), arm)
 
 
 def fuse(path: str | Path, *, method: str | None = None, particles: int | None = None,
@@ -98,8 +99,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
                             kind=session.kind)
     if s.method in PALM_METHODS:  # Cordella et al.: pipeline/palm.py
         return fuse_palm(session, out_dir(session, out), *resolve_recipe(recipe, sets))
-    if s.method == "pf-constraint" and session.arm is None:
-        raise ConfigError(session.toml_path, "has no [arm] section, which pf-constraint needs",
+    if "arm" in NEEDS[s.method] and session.arm is None:
+        raise ConfigError(session.toml_path, f"has no [arm] section, which {s.method} needs",
                           "use inertial, ekf, ukf or pf, or add the arm model")
     dest = out_dir(session, out)
     p = prepare(session, dest, s)
@@ -138,9 +139,9 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
                       f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
     guards = detection_counts(est.codes)
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
-                "frames_beyond_reach": int(far.sum()), **guards}
+                "frames_beyond_reach": int(far.sum()), **guards, **(est.summary or {})}
     q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
-    q_WB[p.frames] = inp.q_WB
+    q_WB[p.frames] = inp.q_WB if est.q_WB is None else est.q_WB
     kin = kinematics_table(table, session, q_WB=q_WB)
     with output_set():
         write_table(dest / name, table, command="fuse", settings=settings)
@@ -150,7 +151,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),
             "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
             "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how,
-            "frames_beyond_reach": int(far.sum()), **guards}
+            "frames_beyond_reach": int(far.sum()), **guards, **(est.summary or {})}
 
 
 def detection_counts(codes: np.ndarray | None) -> dict[str, int]:

@@ -25,7 +25,7 @@ from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_worl
 from armtrack_cli.session.tables import read_csv_table, read_kinematics, read_measures, read_trajectory
 from armtrack_cli.session.workfolder import WorkFolder
 
-PREFERENCE = {"palm": ("ukf-palm",), "arm": ("pf-constraint", "pf", "ukf", "ekf", "inertial"),
+PREFERENCE = {"palm": ("ukf-palm",), "arm": ("arm-smoother", "pf-constraint", "pf", "ukf", "ekf", "inertial"),
               "object": ("pf", "ukf", "ekf", "inertial")}
 
 

@@ -10,10 +10,12 @@ METHODS = {  # short plain names for tables; page 1 adds the source
     "ukf": "unscented Kalman filter",
     "pf": "particle filter",
     "pf-constraint": "particle filter with arm constraint",
+    "arm-smoother": "orientation-aware arm smoother",
     "ukf-palm": "palm-marker Kalman filter",
 }
 SOURCES = {"pf-constraint": "Tao & Hu 2008", "ekf": "Tao & Hu 2008", "pf": "Tao & Hu 2008",
-           "inertial": "Tao & Hu 2008", "ukf-palm": "Cordella et al."}
+           "inertial": "Tao & Hu 2008", "ukf-palm": "Cordella et al.",
+           "arm-smoother": "armtrack, after Tao & Hu 2008"}
 TASKS = {"circle": "circles on the table", "rectangle": "rectangles on the table",
          "reach": "reaching forward and back", "figure8": "figures of eight on the table",
          "wrist-rom": "wrist range of motion", "reach-grasp": "reach and grasp"}

@@ -219,7 +219,7 @@ ARM_CASES = [
 ]
 
 # the same damaged inputs through every fusion method
-for _m in ("inertial", "ukf", "pf", "pf-constraint"):
+for _m in ("inertial", "ukf", "pf", "pf-constraint", "arm-smoother"):
     ARM_CASES += [
         (f"det-u-1e9-{_m}", ["fuse", "{S}", "--method", _m], cell(DET, 10, "u", "1e9"), DET,
          "far outside"),

@@ -1,0 +1,183 @@
+"""The orientation-aware arm smoother (method ``arm-smoother``): the wrist (p, v), the IMU's
+orientation error δθ and accelerometer bias b_a (and, with ``shoulder = "drifting"``, the
+shoulder S) estimated over the whole session at once, as a Gauss–Newton iterated extended
+Kalman smoother. Equations and their derivation: docs/fusion.md.
+
+State, d = 12 (15 with the drifting shoulder):  x = (p, v, δθ, b_a[, S])  in W, m, m/s, rad, m/s².
+  - process (Tao & Hu eqs. 4–6 with both IMU errors): fuse/imu_fold.py, linear given the IMU;
+    δθ first-order Gauss–Markov (SD orientation_sd_deg, time constant orientation_tau_s),
+    b_a a slow random walk, S first-order Gauss–Markov about the declared shoulder;
+  - camera (eq. 7): the patch pixel π(p), σ = pixel_sigma, gated by χ² (gate_chi2);
+  - arm (eq. 15): |p − L2 u − S| − L1 = 0 ± constraint_sigma_m, with the forearm
+    u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
+Each iteration linearises camera and arm about the current smoothed trajectory and runs one
+forward Kalman filter and RTS pass (fuse/smoother_kernel.py); the first trajectory is a robust
+first pass (pf-constraint, RTS-smoothed), so the ray–sphere branch is the particles' choice.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.fuse import imu_fold
+from armtrack_cli.fuse.models import Arm, Projection
+from armtrack_cli.fuse.settings import FuseSettings
+from armtrack_cli.fuse.smoother_kernel import smooth
+
+P_, V_, TH, BA, SH = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
+STEP_TOL_M = 1e-5  # Gauss–Newton has converged when no wrist position moves more than this
+
+
+@dataclass(frozen=True)
+class ImuSamples:
+    """The IMU on the session clock: t (M,) s, q_WB (M, 4), f_B (M, 3) m/s² (specific force)."""
+
+    t: np.ndarray
+    q_WB: np.ndarray
+    f_B: np.ndarray
+
+
+@dataclass(frozen=True)
+class Smoothed:
+    x: np.ndarray  # (n, d) smoothed state
+    P: np.ndarray  # (n, d, d)
+    q_WB: np.ndarray  # (n, 4) the corrected orientation R = exp(−[δθ]×) R̂
+    elbow_cov: np.ndarray  # (n, 3, 3)
+    gated: np.ndarray  # (n,) bool, detections not used
+    iterations: int
+
+
+def orientation_var(s: FuseSettings) -> np.ndarray:
+    """(3, 3) stationary covariance of δθ: tilt (about W's x and y) and heading (about z)."""
+    return np.diag(np.deg2rad([s.orientation_sd_deg, s.orientation_sd_deg,
+                               s.heading_sd_deg]) ** 2)
+
+
+def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
+            imu_period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """F (n, d, d), b (n, d), Q (n, d, d) of the augmented state's steps (index 0 unused)."""
+    n, d = fd.dt.size, 12 if shoulder is None else 15
+    dt = fd.dt[:, None, None]
+    eye = np.eye(3)
+    F = np.tile(np.eye(d), (n, 1, 1))
+    b, Q = np.zeros((n, d)), np.zeros((n, d, d))
+    F[:, P_, V_] = dt * eye
+    F[:, P_, TH], F[:, V_, TH] = fd.A_p, fd.A_v
+    F[:, P_, BA], F[:, V_, BA] = -fd.B_p, -fd.B_v
+    b[:, P_], b[:, V_] = fd.dp, fd.dv
+    q = s.smoother_accel_noise**2 * imu_period  # white acceleration density (models.Steps)
+    Q[:, P_, P_] = q * dt**3 / 3 * eye
+    Q[:, P_, V_] = Q[:, V_, P_] = q * dt**2 / 2 * eye
+    Q[:, V_, V_] = q * dt * eye
+    phi = np.exp(-dt / s.orientation_tau_s)  # Gauss–Markov: Var stays orientation_sd²
+    F[:, TH, TH] = phi * eye
+    Q[:, TH, TH] = orientation_var(s) * (1 - phi**2)
+    Q[:, BA, BA] = s.accel_bias_walk**2 * dt * eye
+    if shoulder is not None:
+        phs = np.exp(-dt / s.shoulder_tau_s)
+        F[:, SH, SH] = phs * eye
+        b[:, SH] = (1 - phs[:, 0]) * shoulder
+        Q[:, SH, SH] = s.shoulder_sd_m**2 * (1 - phs**2) * eye
+    return F, b, Q
+
+
+def projection_jacobians(proj: Projection, p: np.ndarray) -> np.ndarray:
+    """∂π/∂p (n, 2, 3) at points p (n, 3): Projection.jacobian for every point at once."""
+    X = p @ proj.R.T + proj.T
+    x, y, Z = X[:, 0] / X[:, 2], X[:, 1] / X[:, 2], X[:, 2]
+    r2 = x * x + y * y
+    rad = 1 + r2 * (proj.k1 + r2 * (proj.k2 + r2 * proj.k3))
+    D = proj.k1 + 2 * proj.k2 * r2 + 3 * proj.k3 * r2 * r2  # ∂rad/∂r²
+    off = 2 * x * y * D + 2 * proj.p1 * x + 2 * proj.p2 * y
+    Jd = np.stack([np.stack([rad + 2 * x * x * D + 2 * proj.p1 * y + 6 * proj.p2 * x, off], -1),
+                   np.stack([off, rad + 2 * y * y * D + 6 * proj.p1 * y + 2 * proj.p2 * x], -1)],
+                  -2)
+    zero = np.zeros_like(Z)
+    Jn = np.stack([np.stack([1 / Z, zero, -X[:, 0] / Z**2], -1),
+                   np.stack([zero, 1 / Z, -X[:, 1] / Z**2], -1)], -2)
+    return proj._f[None, :, None] * (Jd @ Jn @ proj.R)
+
+
+def corrected(q_hat: np.ndarray, dtheta: np.ndarray) -> np.ndarray:
+    """R = exp(−[δθ]×) R̂ as quaternions (n, 4): the IMU's orientation with its error removed."""
+    ang = np.linalg.norm(dtheta, axis=1)
+    axis = dtheta / np.maximum(ang, 1e-300)[:, None]
+    return quat.normalize(quat.multiply(quat.from_axis_angle(axis, -ang), q_hat))
+
+
+def forearm(q_hat: np.ndarray, dtheta: np.ndarray, arm: Arm) -> np.ndarray:
+    """u (n, 3): the forearm axis in W from the corrected orientation (eq. 2)."""
+    return quat.rotate(corrected(q_hat, dtheta), arm.forearm_B)
+
+
+def linearise(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, arm: Arm,
+              shoulder: np.ndarray):
+    """Camera rows (Hc (n, 2, d), zc (n, 2)) and arm row (Hk (n, d), zk (n,)) linearised about
+    the trajectory X (n, d): h(x) ≈ h(x̄) + H (x − x̄), written as z' = H x with
+    z' = z − h(x̄) + H x̄ (camera) and z' = H x̄ − r(x̄) (arm, whose measurement is r = 0)."""
+    n, d = X.shape
+    p = X[:, P_]
+    Hc = np.zeros((n, 2, d))
+    Hc[:, :, P_] = projection_jacobians(proj, p)  # eq. 7
+    zc = np.where(np.isfinite(z), z, 0.0) - proj(p) + np.einsum("kij,kj->ki", Hc, X)
+    u = forearm(q_hat, X[:, TH], arm)
+    S = X[:, SH] if d == 15 else np.broadcast_to(shoulder, p.shape)
+    e = p - arm.L2 * u - S  # E − S (eq. 15)
+    dist = np.linalg.norm(e, axis=1)
+    nvec = e / dist[:, None]
+    Hk = np.zeros((n, d))
+    Hk[:, P_] = nvec
+    Hk[:, TH] = -arm.L2 * np.cross(nvec, u)  # ∂u/∂δθ = [u]×: nᵀ[u]× = (n × u)ᵀ
+    if d == 15:
+        Hk[:, SH] = -nvec
+    zk = np.einsum("kj,kj->k", Hk, X) - (dist - arm.L1)
+    return Hc, zc, Hk, zk
+
+
+def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
+          shoulder: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """The first frame's prior: (p, v) as the other methods start, δθ, b_a about zero, S about
+    the declared shoulder."""
+    d = 12 if shoulder is None else 15
+    m, P = np.zeros(d), np.zeros((d, d))
+    m[:6], P[:6, :6] = x0, P0
+    P[TH, TH] = orientation_var(s)
+    P[BA, BA] = s.accel_bias_sd**2 * np.eye(3)
+    if shoulder is not None:
+        m[SH], P[SH, SH] = shoulder, s.shoulder_sd_m**2 * np.eye(3)
+    return m, P
+
+
+def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
+        first: np.ndarray, x0: np.ndarray, P0: np.ndarray, proj: Projection, s: FuseSettings,
+        arm: Arm) -> Smoothed:
+    """Smooth the session: frames at t_frames (n,) s with detections z (n, 2) px (NaN = none),
+    the IMU orientation q_hat (n, 4) at each frame, ``first`` (n, 6) the first pass's (p, v)."""
+    shoulder = np.asarray(arm.shoulder, float) if s.shoulder == "drifting" else None
+    fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
+    period = float(np.median(np.diff(imu.t)))
+    F, b, Q = process(fd, s, shoulder, period)
+    m0, Pm0 = prior(x0, P0, s, shoulder)
+    X = np.zeros((t_frames.size, m0.size))
+    X[:, :6] = first
+    if shoulder is not None:
+        X[:, SH] = shoulder
+    use_c = np.isfinite(z).all(axis=1)
+    use_k = np.ones(t_frames.size, bool)
+    rc, rk = s.pixel_sigma**2, s.constraint_sigma_m**2
+    iterations, step = 0, np.inf
+    while iterations < s.smoother_iterations and step >= STEP_TOL_M:
+        Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm, arm.shoulder)
+        Xn, P, gated = smooth(m0, Pm0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk,
+                              float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf)  # 0: off
+        step = np.abs(Xn[:, P_] - X[:, P_]).max()
+        X, iterations = Xn, iterations + 1
+    u = forearm(q_hat, X[:, TH], arm)
+    J = np.zeros((X.shape[0], 3, X.shape[1]))  # ∂E/∂x, E = p − L2 u(δθ) (eq. 2)
+    J[:, :, P_] = np.eye(3)
+    J[:, :, TH] = -arm.L2 * imu_fold.skew(u)
+    return Smoothed(X, P, corrected(q_hat, X[:, TH]), J @ P @ np.swapaxes(J, 1, 2), gated,
+                    iterations)

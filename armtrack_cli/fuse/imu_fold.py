@@ -1,0 +1,99 @@
+"""The IMU samples between two camera frames folded into one linear step of the augmented
+state (p, v, δθ, b_a) of the orientation-aware arm smoother (docs/fusion.md).
+
+With the IMU's orientation R̂ = R_e R (the output orientation is the true one turned by a small
+world-frame error R_e = exp([δθ]×)) and the accelerometer f̂ = f + b_a (+ noise), the true
+acceleration in W is, to first order in δθ and b_a (Tao & Hu eq. 4 with both errors):
+
+    a_W = R (f̂ − b_a) + g ≈ s + g + [s]× δθ − R̂ b_a,      s = R̂ f̂ (specific force in W).
+
+δθ and b_a vary slowly, so over one frame interval they are constants and the step is linear:
+
+    v_k = v + dv + A_v δθ − B_v b_a,     p_k = p + v Δ + dp + A_p δθ − B_p b_a,
+
+where dv, A_v, B_v are ∫ a(t) dt with a(t) = s + g, [s]×, R̂ in turn, and dp, A_p, B_p are
+∫ a(t) (t_k − t) dt. ``hold = "sample"`` holds each sample until the next (models.composite_steps,
+which this equals for δθ = b_a = 0); ``hold = "linear"`` interpolates linearly between samples
+(a first-order hold), which removes the half-sample lag (T_s / 2) of holding.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.fuse.models import GRAVITY_W
+from armtrack_cli.fuse.settings import HOLDS
+
+
+@dataclass(frozen=True)
+class Folded:
+    """Per camera frame k, the step k-1 -> k (index 0 unused: zeros)."""
+
+    dt: np.ndarray  # (n,) Δ, s
+    dp: np.ndarray  # (n, 3) m, ∫ (s + g)(t_k − t) dt
+    dv: np.ndarray  # (n, 3) m/s, ∫ (s + g) dt
+    A_p: np.ndarray  # (n, 3, 3) ∂p_k/∂δθ
+    A_v: np.ndarray  # (n, 3, 3) ∂v_k/∂δθ
+    B_p: np.ndarray  # (n, 3, 3) −∂p_k/∂b_a
+    B_v: np.ndarray  # (n, 3, 3) −∂v_k/∂b_a
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """[v]× (..., 3, 3): [v]× w = v × w."""
+    z = np.zeros(v.shape[:-1])
+    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
+                     np.stack([v[..., 2], z, -v[..., 0]], -1),
+                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+
+
+def _segments(t_imu: np.ndarray, t_frames: np.ndarray, hold: str):
+    """Every piece [s0, s1) between consecutive IMU-sample and frame times, in time order:
+    its frame k, and for the two samples (j, j1) its acceleration depends on, the weights on
+    ∫ a dt (wv, wv1) and on ∫ a (t_k − t) dt (wp, wp1)."""
+    brk = np.union1d(t_imu, t_frames)
+    brk = brk[(brk >= t_frames[0]) & (brk <= t_frames[-1])]
+    s0, s1 = brk[:-1], brk[1:]
+    last = t_imu.size - 1
+    j = np.clip(np.searchsorted(t_imu, s0, side="right") - 1, 0, last)  # sample at or before s0
+    k = np.searchsorted(t_frames, s0, side="right")  # the interval ending at t_frames[k]
+    tau, D = s1 - s0, t_frames[k] - s0
+    wv, wp = tau, (D**2 - (D - tau) ** 2) / 2  # ∫ dt and ∫ (t_k − t) dt over the piece
+    if hold == "sample":
+        return k, (j, j), (wv, 0 * wv), (wp, 0 * wp)
+    # first-order hold: a(t) = a(s0) + (a(s1) − a(s0)) (t − s0)/τ on the piece, so
+    # ∫ a dt = τ (a(s0) + a(s1))/2 and ∫ a (t_k − t) dt = a(s0) (wp − c) + a(s1) c with
+    # c = ∫₀^τ u (D − u) du / τ = D τ/2 − τ²/3; a(s) interpolates samples j and j + 1
+    c = D * tau / 2 - tau**2 / 3
+    j1 = np.minimum(j + 1, last)
+    span = np.where(j1 > j, t_imu[j1] - t_imu[j], 1.0)
+    lam0 = np.clip((s0 - t_imu[j]) / span, 0.0, 1.0) * (j1 > j)
+    lam1 = np.clip((s1 - t_imu[j]) / span, 0.0, 1.0) * (j1 > j)
+    cv0 = cv1 = tau / 2
+    cp0, cp1 = wp - c, c
+    on_j = ((1 - lam0) * cv0 + (1 - lam1) * cv1, (1 - lam0) * cp0 + (1 - lam1) * cp1)
+    on_j1 = (lam0 * cv0 + lam1 * cv1, lam0 * cp0 + lam1 * cp1)
+    return k, (j, j1), (on_j[0], on_j1[0]), (on_j[1], on_j1[1])
+
+
+def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndarray, *,
+         hold: str = "linear") -> Folded:
+    """Fold IMU samples (t_imu (M,) s, q_WB (M, 4), f_B (M, 3) m/s²) over the frame intervals of
+    t_frames (n,) s, all on the session clock."""
+    if hold not in HOLDS:
+        raise ValueError(f"unknown hold {hold!r}; holds are {', '.join(HOLDS)}")
+    R = quat.to_matrix(q_WB)  # (M, 3, 3) R̂_WB
+    s = np.einsum("mij,mj->mi", R, f_B)  # specific force in W
+    k, (j, j1), (wv, wv1), (wp, wp1) = _segments(t_imu, t_frames, hold)
+    n = t_frames.size
+    per_sample = np.concatenate([(s + GRAVITY_W)[:, :, None], skew(s), R], axis=2)  # (M, 3, 7)
+    acc_v, acc_p = np.zeros((n, 3, 7)), np.zeros((n, 3, 7))
+    first = np.flatnonzero(np.r_[True, np.diff(k) > 0])  # pieces are in time order: k sorted
+    for acc, w0, w1 in ((acc_v, wv, wv1), (acc_p, wp, wp1)):
+        piece = w0[:, None, None] * per_sample[j] + w1[:, None, None] * per_sample[j1]
+        acc[k[first]] = np.add.reduceat(piece, first, axis=0)
+    dt = np.r_[0.0, np.diff(t_frames)]
+    return Folded(dt, acc_p[:, :, 0], acc_v[:, :, 0], acc_p[:, :, 1:4], acc_v[:, :, 1:4],
+                  acc_p[:, :, 4:7], acc_v[:, :, 4:7])

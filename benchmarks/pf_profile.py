@@ -1,0 +1,89 @@
+"""Where the compiled layered PF spends a frame (make bench): each pass of fuse/pf_kernel.py
+timed alone, many times over, on a cloud of N particles like circle-01's (1 cm, 5 cm/s), in
+CPU µs per frame; the passes a pf-constraint frame with a detection makes, and their sum,
+beside the whole kernel's time per frame measured in the same run. This is the profile that
+bounds the kernel's speed: what a faster kernel would have to make cheaper."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from timing import best_of  # noqa: I001  (benchmarks/ is on sys.path)
+
+from armtrack_cli.filters import sfc64
+from armtrack_cli.fuse import pf_kernel as K
+
+
+@njit
+def _normals(r, s, eps):
+    for _ in range(r):
+        K.fill_normals(s, eps.T)
+
+
+@njit
+def _predict_weigh(r, xs, eps, dt, d3, ace, z, cam, dist, w, lw, px):
+    for _ in range(r):
+        K._predict_and_weigh(xs, eps, 1, dt, d3, d3, ace, z, 1 / 32, cam, dist, w, True, lw,
+                             px)
+
+
+@njit
+def _normalise(r, lw, w):
+    for _ in range(r):
+        K._normalise(lw, w)
+
+
+@njit
+def _resample(r, w, s, idx, work, start):
+    for _ in range(r):
+        K._resample(w, s, 0, idx, work, start)
+
+
+@njit
+def _take(r, xs, idx, xr):
+    for _ in range(r):
+        K._take(xs, idx, xr)
+
+
+@njit
+def _walk(r, xs, eps, walk, centre, lw):
+    for _ in range(r):
+        K._walk_and_constrain(xs, eps, walk, centre, 0.31, 5000.0, lw)
+
+
+@njit
+def _moments(r, xs, w, mean, cov, d):
+    for _ in range(r):
+        K._moments(xs, w, mean, cov, d)
+
+
+def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
+    """(pass, times per frame, µs per call) for a pf-constraint frame with a detection."""
+    rng = np.random.default_rng(0)
+    xs = np.ascontiguousarray(np.c_[rng.normal(0.3, 0.01, (n, 3)),
+                                    rng.normal(0.0, 0.05, (n, 3))].T)
+    s = sfc64.get_state(sfc64.generator(0))
+    eps = np.empty((12, n))
+    K.fill_normals(s, eps.T)
+    cam = np.r_[1.0, 0, 0, 0, -1, 0, 0, 0, -1, -0.3, 0.2, 1.6, 600, 610, 320, 240]
+    dist = np.array([0.1, -0.05, 0.001, -0.002, 0.01])
+    dt, d3, ace = np.full(4, 1 / 30), np.zeros((4, 3)), np.full((4, 3), 1e-3)
+    z, w, lw = np.array([320.0, 240.0]), np.full(n, 1 / n), -rng.uniform(0, 5, n)
+    idx, xr = np.empty(n, np.int64), np.empty_like(xs)
+    work, start = np.empty((3, n)), np.empty(n + 1, np.int64)
+    walk, centre = np.r_[np.full(3, 0.005), np.full(3, 0.01)], np.array([0.1, 0.45, 0.32])
+    mean, cov = np.empty(6), np.empty((6, 6))
+    cases = [("12 standard normals per particle (SFC64, ziggurat)", 1, _normals, (s, eps)),
+             ("predict and weigh by the detection (eqs. 10, 11)", 1, _predict_weigh,
+              (xs.copy(), eps, dt, d3, ace, z, cam, dist, w, np.empty(n), np.empty((2, n)))),
+             ("normalise the weights (exp)", 2, _normalise, (lw, w)),
+             ("residual resampling", 2, _resample, (w, s, idx, work, start)),
+             ("gather the resampled particles", 2, _take, (xs, idx, xr)),
+             ("random walk and arm constraint (eqs. 15-18)", 1, _walk,
+              (xs.copy(), eps, walk, centre, np.empty(n))),
+             ("weighted mean and covariance", 1, _moments, (xs, w, mean, cov, xr))]
+    rows = []
+    for name, times, fn, args in cases:
+        fn(1, *args)  # compiled
+        rows.append((name, times, best_of(lambda f=fn, a=args: f(reps, *a), runs=5) / reps * 1e6))
+    return rows

@@ -1,0 +1,189 @@
+"""The orientation-aware arm smoother's parts against independent answers: one smoother pass
+against batch least squares on a linear-Gaussian model, the IMU fold against the held-sample
+steps and closed-form integrals, the linearised rows against finite differences. Its accuracy
+on simulated sessions is tested in test_fuse_compare.py, studied in `make validate`."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.fuse import arm_smoother, imu_fold, models
+from armtrack_cli.fuse.settings import FuseSettings
+from armtrack_cli.fuse.smoother_kernel import smooth
+
+
+def _linear_problem(rng, n=20, d=7):
+    F = np.eye(d) + 0.1 * rng.standard_normal((n, d, d))
+    b = rng.standard_normal((n, d))
+    A = rng.standard_normal((n, d, d))
+    Q = A @ np.swapaxes(A, 1, 2) * 0.05 + 0.01 * np.eye(d)
+    Hc, Hk = rng.standard_normal((n, 2, d)), rng.standard_normal((n, d))
+    zc, zk = rng.standard_normal((n, 2)), rng.standard_normal(n)
+    use_c, use_k = rng.random(n) < 0.7, rng.random(n) < 0.5
+    x0, P0 = rng.standard_normal(d), np.diag(rng.uniform(0.5, 2.0, d))
+    return x0, P0, F, b, Q, Hc, zc, use_c, 0.3, Hk, zk, use_k, 0.2
+
+
+def _batch(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk):
+    """The MAP of the whole linear-Gaussian model by its normal equations, and the
+    posterior covariance: the inverse of their matrix (independent of any filter)."""
+    n, d = F.shape[0], x0.size
+    rows, rhs, wts = [], [], []
+
+    def add(blocks, target, info):
+        row = np.zeros((target.size, n * d))
+        for k, M in blocks:
+            row[:, k * d:(k + 1) * d] = M
+        rows.append(row)
+        rhs.append(target)
+        wts.append(info)
+
+    add([(0, np.eye(d))], x0, np.linalg.inv(P0))
+    for k in range(1, n):
+        add([(k, np.eye(d)), (k - 1, -F[k])], b[k], np.linalg.inv(Q[k]))
+    for k in range(n):
+        if use_c[k]:
+            add([(k, Hc[k])], zc[k], np.eye(2) / rc)
+        if use_k[k]:
+            add([(k, Hk[k][None])], zk[k:k + 1], np.eye(1) / rk)
+    info = sum(r.T @ w @ r for r, w in zip(rows, wts))
+    vec = sum(r.T @ w @ t for r, w, t in zip(rows, wts, rhs))
+    cov = np.linalg.inv(info)
+    return np.linalg.solve(info, vec).reshape(n, d), cov
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_one_pass_equals_batch_least_squares(compiled):
+    prob = _linear_problem(np.random.default_rng(4))
+    fn = smooth if compiled else smooth.py_func
+    xs, Ps, gated = fn(*prob, np.inf)
+    x_ref, cov = _batch(*prob)
+    d = xs.shape[1]
+    assert not gated.any()
+    assert np.abs(xs - x_ref).max() < 1e-10
+    for k in range(xs.shape[0]):
+        assert np.abs(Ps[k] - cov[k * d:(k + 1) * d, k * d:(k + 1) * d]).max() < 1e-10
+
+
+def test_gated_detection_is_as_if_absent():
+    """A camera pair 100 σ off is not used: the result equals the smoother without it."""
+    prob = list(_linear_problem(np.random.default_rng(5)))
+    k = int(np.flatnonzero(prob[7])[3])
+    prob[6] = prob[6].copy()
+    prob[6][k] += 100 * np.sqrt(prob[8]) * 10
+    xs, Ps, gated = smooth(*prob, 13.8)
+    assert np.flatnonzero(gated).tolist() == [k]
+    prob[7] = prob[7].copy()
+    prob[7][k] = False
+    xs2, Ps2, _ = smooth(*prob, np.inf)
+    assert np.abs(xs - xs2).max() < 1e-12 and np.abs(Ps - Ps2).max() < 1e-12
+
+
+def _imu(rng, m=300):
+    t = np.arange(m) * 0.01 + 0.004
+    q = quat.normalize(np.array([1.0, 0, 0, 0]) + 0.3 * rng.standard_normal((m, 4)))
+    return t, q, rng.standard_normal((m, 3)) + [0, 0, 9.81]
+
+
+def test_fold_by_sample_equals_the_held_steps():
+    t, q, f = _imu(np.random.default_rng(1))
+    tf = np.arange(0.1, 2.9, 1 / 30)
+    st = models.composite_steps(t, models.accel_world(q, f), tf, accel_noise=1.0,
+                                imu_period=0.01)
+    fd = imu_fold.fold(t, q, f, tf, hold="sample")
+    assert np.abs(fd.dp - st.dp).max() < 1e-14 and np.abs(fd.dv - st.dv).max() < 1e-14
+
+
+def test_linear_hold_is_exact_for_an_acceleration_linear_in_time():
+    """a(t) = a0 + a1 t: ∫ a dt and ∫ a (t_k − t) dt in closed form."""
+    a0, a1 = np.array([1.0, 2, 3]), np.array([0.5, -1, 2])
+    t = np.arange(0, 3, 0.01)
+    q = np.tile([1.0, 0, 0, 0], (t.size, 1))
+    tf = np.arange(0.1, 2.9, 1 / 30)
+    fd = imu_fold.fold(t, q, a0 + a1 * t[:, None] - models.GRAVITY_W, tf, hold="linear")
+    T0, T1 = tf[:-1], tf[1:]
+    dv = a0 * (T1 - T0)[:, None] + a1 * ((T1**2 - T0**2) / 2)[:, None]
+    prim = lambda s: (a0 * (T1 * s - s**2 / 2)[:, None]  # noqa: E731
+                      + a1 * (T1 * s**2 / 2 - s**3 / 3)[:, None])
+    assert np.abs(fd.dv[1:] - dv).max() < 1e-12
+    assert np.abs(fd.dp[1:] - (prim(T1) - prim(T0))).max() < 1e-12
+
+
+@pytest.mark.parametrize("hold", ["linear", "sample"])
+def test_fold_errors_enter_as_the_derivation_says(hold):
+    """A bias b in f̂ moves (dp, dv) by exactly −(B_p, B_v) b; an orientation error δθ
+    (true R = exp(−[δθ]×) R̂) by (A_p, A_v) δθ to first order."""
+    t, q, f = _imu(np.random.default_rng(2))
+    tf = np.arange(0.1, 2.9, 1 / 30)
+    base = imu_fold.fold(t, q, f, tf, hold=hold)
+    bias = np.array([0.03, -0.02, 0.05])
+    fb = imu_fold.fold(t, q, f - bias, tf, hold=hold)
+    assert np.abs(fb.dv - base.dv + base.B_v @ bias).max() < 1e-13
+    assert np.abs(fb.dp - base.dp + base.B_p @ bias).max() < 1e-13
+    th = np.array([2e-4, -1e-4, 3e-4])
+    qt = arm_smoother.corrected(q, np.tile(th, (t.size, 1)))
+    ft = imu_fold.fold(t, qt, f, tf, hold=hold)
+    scale = np.abs(base.A_v @ th).max()
+    assert np.abs(ft.dv - base.dv - base.A_v @ th).max() < 1e-3 * scale
+    assert np.abs(ft.dp - base.dp - base.A_p @ th).max() < 1e-3 * np.abs(base.A_p @ th).max()
+
+
+def _camera():
+    K = np.array([[600.0, 0, 320], [0, 610, 240], [0, 0, 1]])
+    R = quat.to_matrix(quat.from_axis_angle(np.array([1.0, 0.2, 0]) / np.hypot(1, 0.2), 2.0))
+    return models.Projection(CameraModel(K=K, dist=np.array([-0.2, 0.05, 0.001, -0.002, 0.01]),
+                                         R_WC=R, T_WC=np.array([0.1, 0.2, 1.2]), width=640,
+                                         height=480))
+
+
+@pytest.mark.parametrize("drifting", [False, True])
+def test_linearised_rows_match_finite_differences(drifting):
+    rng = np.random.default_rng(3)
+    proj = _camera()
+    arm = models.Arm(shoulder=np.array([0.0, 0.3, 0.35]), L1=0.3, L2=0.28,
+                     forearm_B=np.array([1.0, 0, 0]))
+    n, d = 4, 15 if drifting else 12
+    X = np.zeros((n, d))
+    X[:, :3] = [0.25, 0.2, 0.1] + 0.03 * rng.standard_normal((n, 3))
+    X[:, 6:9] = 0.01 * rng.standard_normal((n, 3))
+    if drifting:
+        X[:, 12:15] = arm.shoulder + 0.01 * rng.standard_normal((n, 3))
+    q = quat.normalize(rng.standard_normal((n, 4)))
+    z = proj(X[:, :3]) + 1.0
+    Hc, zc, Hk, zk = arm_smoother.linearise(X, z, q, proj, arm, arm.shoulder)
+
+    def residuals(Y):
+        u = arm_smoother.forearm(q, Y[:, 6:9], arm)
+        S = Y[:, 12:15] if drifting else arm.shoulder
+        return proj(Y[:, :3]), np.linalg.norm(Y[:, :3] - arm.L2 * u - S, axis=1) - arm.L1
+
+    h0, r0 = residuals(X)
+    assert np.abs(zc - (z - h0 + np.einsum("kij,kj->ki", Hc, X))).max() < 1e-9
+    for j in range(d):
+        dX = np.zeros_like(X)
+        dX[:, j] = 1e-6
+        (hp, rp), (hm, rm) = residuals(X + dX), residuals(X - dX)
+        assert np.allclose((hp - hm) / 2e-6, Hc[:, :, j], rtol=1e-5, atol=1e-3)
+        # ∂u/∂δθ = [u]× is the derivative at δθ = 0; at |δθ| ~ 1° it is within a few %
+        assert np.allclose((rp - rm) / 2e-6, Hk[:, j], rtol=0.05, atol=1e-6)
+
+
+def test_process_is_gauss_markov_with_the_stated_spread():
+    """δθ's stationary SD is orientation_sd_deg (tilt) and heading_sd_deg (about z) whatever
+    the frame interval; the shoulder's likewise, about the declared shoulder."""
+    s = FuseSettings(orientation_sd_deg=0.8, heading_sd_deg=1.2, orientation_tau_s=1.5,
+                     shoulder_sd_m=0.02)
+    t, q, f = _imu(np.random.default_rng(6))
+    fd = imu_fold.fold(t, q, f, np.arange(0.1, 2.9, 1 / 30))
+    S0 = np.array([0.1, 0.2, 0.3])
+    F, b, Q = arm_smoother.process(fd, s, S0, 0.01)
+    var = np.diag(np.deg2rad([0.8, 0.8, 1.2]) ** 2)
+    k = 5
+    assert np.allclose(F[k, 6:9, 6:9] @ var @ F[k, 6:9, 6:9].T + Q[k, 6:9, 6:9], var,
+                       rtol=1e-12, atol=0)
+    assert np.allclose(F[k, 12:15, 12:15] @ S0 + b[k, 12:15], S0, rtol=1e-12)
+    assert np.allclose(F[k, 12:15, 12:15] @ (4e-4 * np.eye(3)) @ F[k, 12:15, 12:15].T
+                       + Q[k, 12:15, 12:15], 4e-4 * np.eye(3), rtol=1e-12)
