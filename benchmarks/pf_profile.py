@@ -21,9 +21,10 @@ def _normals(r, s, eps):
 
 
 @njit
-def _predict_weigh(r, xs, eps, dt, d3, ace, z, cam, dist, w, lw):
+def _predict_weigh(r, xs, eps, dt, d3, ace, z, cam, dist, w, lw, px):
     for _ in range(r):
-        K._predict_and_weigh(xs, eps, 1, dt, d3, d3, ace, z, 1 / 32, cam, dist, w, True, lw)
+        K._predict_and_weigh(xs, eps, 1, dt, d3, d3, ace, z, 1 / 32, cam, dist, w, True, lw,
+                             px)
 
 
 @njit
@@ -74,7 +75,7 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
     mean, cov = np.empty(6), np.empty((6, 6))
     cases = [("12 standard normals per particle (SFC64, ziggurat)", 1, _normals, (s, eps)),
              ("predict and weigh by the detection (eqs. 10, 11)", 1, _predict_weigh,
-              (xs.copy(), eps, dt, d3, ace, z, cam, dist, w, np.empty(n))),
+              (xs.copy(), eps, dt, d3, ace, z, cam, dist, w, np.empty(n), np.empty((2, n)))),
              ("normalise the weights (exp)", 2, _normalise, (lw, w)),
              ("residual resampling", 2, _resample, (w, s, idx, work, start)),
              ("gather the resampled particles", 2, _take, (xs, idx, xr)),

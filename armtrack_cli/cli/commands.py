@@ -390,16 +390,3 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
                                    on_frame=bar)
     emit(result, as_json, text.simulate_lines(result))
 
-
-def render_reference() -> str:
-    """docs/cli.md: every command's --help, generated (a test keeps it in step)."""
-    parts = ["# armtrack command-line reference", "",
-             "Generated from `--help` by `make docs`; do not edit by hand.", ""]
-    root = click.Context(main, info_name="armtrack", terminal_width=100, **CONTEXT)
-    parts += ["## armtrack", "", "```", main.get_help(root), "```", ""]
-    for name in sorted(main.commands):
-        cmd = main.commands[name]
-        ctx = click.Context(cmd, info_name=name, parent=root, terminal_width=100, **CONTEXT)
-        parts += [f"## armtrack {name}", "", "```", cmd.get_help(ctx), "```", ""]
-    return "\n".join(parts)
-

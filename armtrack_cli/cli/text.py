@@ -29,8 +29,11 @@ def detect_lines(folder: str, r: dict[str, Any]) -> list[str]:
 
 
 def fuse_lines(folder: str, r: dict[str, Any]) -> list[str]:
+    guards = ", ".join(f"{r[k]} {k.replace('_frames', '')}" for k in
+                       ("gated_frames", "reacquired", "reseeded") if r.get(k))
     return [f"{folder}: {r['method']}: {r['frames']} frames ({r['detections_used']} with a "
-            f"detection), {r['frames_per_s']:.0f} frames/s -> {r['trajectory']}"] + (
+            f"detection{'; ' + guards if guards else ''}), {r['frames_per_s']:.0f} frames/s "
+            f"-> {r['trajectory']}"] + (
         [f"  initialised from {r['initialised_from']}: residual {r['init_residual_px']} px, "
          f"{r['init_residual_mm']} mm"] if "init_residual_px" in r else []) + (
         ["  arm " + arm_estimate_line(r["arm_auto"])] if r.get("arm_auto") else []) + _imu_offset(r)

@@ -40,6 +40,29 @@ def kf_update(s: Gaussian, z: np.ndarray | None, H: np.ndarray, R: np.ndarray) -
     return Gaussian(s.x + gain @ (z - H @ s.x), _joseph(s.P, gain, H, R))
 
 
+def mahalanobis2(nu: np.ndarray, S: np.ndarray) -> float:
+    """νᵀ S⁻¹ ν: the squared Mahalanobis length of an innovation ν (m,) with covariance S
+    (m, m); χ²(m)-distributed when the filter is consistent (Bar-Shalom et al. 2001, 5.4)."""
+    return float(nu @ np.linalg.solve(S, nu))
+
+
+def ekf_innovation(s: Gaussian, z: np.ndarray, h, H_jac, R: np.ndarray) -> tuple[np.ndarray,
+                                                                                np.ndarray]:
+    """The EKF's innovation ν = z − h(x⁻) and its covariance S = H P Hᵀ + R."""
+    H = H_jac(s.x)
+    return z - h(s.x), H @ s.P @ H.T + R
+
+
+def ukf_innovation(s: Gaussian, z: np.ndarray, h, R: np.ndarray,
+                   sp: SigmaPoints) -> tuple[np.ndarray, np.ndarray]:
+    """The UKF's innovation ν = z − ẑ and P_zz = Σ Wc dz dzᵀ + R over Z = h(X)."""
+    Wm, Wc = sp.weights()
+    Z = h(sp.points(s.x, s.P))
+    zm = Wm @ Z
+    dz = Z - zm
+    return z - zm, (Wc[:, None] * dz).T @ dz + R
+
+
 def ekf_update(s: Gaussian, z: np.ndarray | None, h, H_jac, R: np.ndarray) -> Gaussian:
     """Linearise h at the prior mean: H = ∂h/∂x (x⁻); innovation z − h(x⁻)."""
     if z is None:

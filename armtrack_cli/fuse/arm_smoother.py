@@ -172,7 +172,7 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     while iterations < s.smoother_iterations and step >= STEP_TOL_M:
         Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm, arm.shoulder)
         Xn, P, gated = smooth(m0, Pm0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk,
-                              float(s.gate_chi2))
+                              float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf)  # 0: off
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
         X, iterations = Xn, iterations + 1
     u = forearm(q_hat, X[:, TH], arm)

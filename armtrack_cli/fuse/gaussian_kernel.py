@@ -90,9 +90,18 @@ def _gain_update(x, P, innov, Pxz, Pzz, xo, Po):
 
 
 @njit(cache=True)
-def _ekf_update(x, P, z, cam, dist, r2, xo, Po):
+def _mahalanobis2(innov, S):
+    """innovᵀ S⁻¹ innov for a 2 × 2 S (gaussian.mahalanobis2)."""
+    det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
+    a, b = innov[0], innov[1]
+    return (a * (S[1, 1] * a - S[0, 1] * b) + b * (S[0, 0] * b - S[1, 0] * a)) / det
+
+
+@njit(cache=True)
+def _ekf_update(x, P, z, cam, dist, r2, xo, Po, gate):
     """H = ∂h/∂x (x⁻); S = H P Hᵀ + R; gain = P Hᵀ S⁻¹; x = x + gain (z − h(x⁻)); P in
-    Joseph form (I − gain H) P (I − gain H)ᵀ + gain R gainᵀ (gaussian.ekf_update)."""
+    Joseph form (I − gain H) P (I − gain H)ᵀ + gain R gainᵀ (gaussian.ekf_update). Returns the
+    innovation's Mahalanobis²; above ``gate`` nothing is updated (fuse/robust.py)."""
     H = np.empty((2, 6))
     _jacobian(x, cam, dist, H)
     PHt = P @ H.T  # (6, 2)
@@ -101,10 +110,14 @@ def _ekf_update(x, P, z, cam, dist, r2, xo, Po):
     S[1, 1] += r2
     u, v = _pixel(x[0], x[1], x[2], cam, dist)
     innov = np.array([z[0] - u, z[1] - v])
+    d2 = _mahalanobis2(innov, S)
+    if d2 > gate:
+        return d2
     gain = _gain_update(x, P, innov, PHt, S, xo, Po)
     I_KH = np.eye(6) - gain @ H
     Pj = I_KH @ P @ I_KH.T + r2 * (gain @ gain.T)
     Po[:] = Pj
+    return d2
 
 
 @njit(cache=True)
@@ -149,9 +162,10 @@ def _weighted_moments(Y, Wm, Wc, m, C):
 
 
 @njit(cache=True)
-def _ukf_update(x, P, z, cam, dist, r2, Wm, Wc, scale, X, xo, Po):
+def _ukf_update(x, P, z, cam, dist, r2, Wm, Wc, scale, X, xo, Po, gate):
     """Z = h(X) from fresh sigma points of (x⁻, P⁻); P_zz = Σ Wc dz dzᵀ + R,
-    P_xz = Σ Wc dx dzᵀ; then _gain_update (gaussian.ukf_update)."""
+    P_xz = Σ Wc dx dzᵀ; then _gain_update (gaussian.ukf_update). Returns the innovation's
+    Mahalanobis²; above ``gate`` nothing is updated."""
     _sigma_points(x, P, scale, X)
     Z = np.empty((X.shape[0], 2))
     for i in range(X.shape[0]):
@@ -164,19 +178,34 @@ def _ukf_update(x, P, z, cam, dist, r2, Wm, Wc, scale, X, xo, Po):
     Pzz[0, 0] += r2
     Pzz[1, 1] += r2
     Pxz = dx.T @ wdz
-    _gain_update(x, P, z - zm, Pxz, Pzz, xo, Po)
+    d2 = _mahalanobis2(z - zm, Pzz)
+    if d2 <= gate:
+        _gain_update(x, P, z - zm, Pxz, Pzz, xo, Po)
+    return d2
 
 
 @njit(cache=True)
-def run(x0, P0, z, dt, dp, dv, q, cam, dist, r2, method, Wm, Wc, scale):
+def _update(method, x, P, z, cam, dist, r2, Wm, Wc, scale, X, xo, Po, gate):
+    if method == 1:
+        return _ekf_update(x, P, z, cam, dist, r2, xo, Po, gate)
+    return _ukf_update(x, P, z, cam, dist, r2, Wm, Wc, scale, X, xo, Po, gate)
+
+
+@njit(cache=True)
+def run(x0, P0, z, dt, dp, dv, q, cam, dist, r2, method, Wm, Wc, scale, gate, reacquire, infl):
     """methods.run_gaussian: started at frame 0 with (x0, P0); method 0 inertial (prediction
-    only), 1 EKF, 2 UKF; R = r2 I. Returns mean (n_frames, 6), cov (n_frames, 6, 6)."""
+    only), 1 EKF, 2 UKF; R = r2 I. Detections gated at Mahalanobis² ``gate`` (0: off); after
+    ``reacquire`` gated in a row the next is used with infl (6,) added to P's diagonal
+    (fuse/robust.py). Returns mean (n_frames, 6), cov (n_frames, 6, 6), codes (n_frames,)."""
     n_frames = z.shape[0]
     mean = np.empty((n_frames, 6))
     cov = np.empty((n_frames, 6, 6))
+    codes = np.zeros(n_frames, np.int8)
     x, P = x0.copy(), P0.copy()
     xo, Po = np.empty(6), np.empty((6, 6))
     X = np.empty((Wm.size, 6))
+    limit = gate if gate > 0 else np.inf
+    run_gated = 0
     for k in range(n_frames):
         if k > 0:
             if method == 2:
@@ -185,11 +214,24 @@ def run(x0, P0, z, dt, dp, dv, q, cam, dist, r2, method, Wm, Wc, scale):
                 _predict(x, P, dt[k], dp[k], dv[k], q, xo, Po)
             x, xo, P, Po = xo, x, Po, P
         if method > 0 and np.isfinite(z[k, 0]) and np.isfinite(z[k, 1]):
-            if method == 1:
-                _ekf_update(x, P, z[k], cam, dist, r2, xo, Po)
+            codes[k] = 1
+            if run_gated < 0:  # the grace after a re-acquisition (robust.gate)
+                _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po, np.inf)
+                run_gated += 1
+            elif _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po,
+                         limit) <= limit:
+                run_gated = 0
+            elif run_gated < reacquire:
+                codes[k] = 2
+                run_gated += 1
             else:
-                _ukf_update(x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po)
-            x, xo, P, Po = xo, x, Po, P
+                codes[k] = 3
+                run_gated = -reacquire
+                for a in range(6):
+                    P[a, a] += infl[a]
+                _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po, np.inf)
+            if codes[k] != 2:
+                x, xo, P, Po = xo, x, Po, P
         mean[k] = x
         cov[k] = P
-    return mean, cov
+    return mean, cov, codes

@@ -11,7 +11,7 @@ import numpy as np
 from armtrack_cli.filters import gaussian
 from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
-from armtrack_cli.fuse import arm_smoother
+from armtrack_cli.fuse import arm_smoother, robust
 from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.settings import FuseSettings
 
@@ -33,6 +33,7 @@ class Estimates:
     mean: np.ndarray  # (n_frames, 6) wrist position and velocity
     cov: np.ndarray  # (n_frames, 6, 6)
     ess: np.ndarray | None  # (n_frames,) particle filters only
+    codes: np.ndarray | None = None  # (n_frames,) what became of each detection (robust.USED…)
     q_WB: np.ndarray | None = None  # (n_frames, 4) orientation corrected by the method, if any
     elbow_cov: np.ndarray | None = None  # (n_frames, 3, 3) where the method estimates it
     summary: dict | None = None  # what the method adds to fuse's summary
@@ -56,8 +57,11 @@ def run_gaussian(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection, 
     if compiled:
         return _run_gaussian_compiled(inp, x0, P0, proj, s, method, sp)
     R = s.pixel_sigma**2 * np.eye(2)
+    h, h_sigma = (lambda x: proj(x[:3])), (lambda X: proj(X[:, :3]))
+    H_jac = lambda x: np.hstack([proj.jacobian(x[:3]), np.zeros((2, 3))])  # noqa: E731
     st = gaussian.Gaussian(x0, P0)
     mean, cov = np.empty((n_frames, 6)), np.empty((n_frames, 6, 6))
+    codes, run_gated = np.zeros(n_frames, np.int8), 0
     for k in range(n_frames):
         if k > 0:
             if method == "ukf":
@@ -66,13 +70,26 @@ def run_gaussian(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection, 
             else:  # linear process: the KF prediction is the EKF's (eq. 6)
                 st = gaussian.kf_predict(st, inp.steps.F(k), inp.steps.Q(k), inp.steps.b(k))
         z = _z(inp, k)
+        if z is not None and method != "inertial":  # the χ² gate (fuse/robust.py)
+            nu, S = (gaussian.ekf_innovation(st, z, h, H_jac, R) if method == "ekf" else
+                     gaussian.ukf_innovation(st, z, h_sigma, R, sp))
+            codes[k], run_gated = robust.gate(gaussian.mahalanobis2(nu, S), s.gate_chi2,
+                                              run_gated, s.reacquire_frames)
+            if codes[k] == robust.GATED:
+                z = None
+            elif codes[k] == robust.REACQUIRED:
+                st = gaussian.Gaussian(st.x, st.P + np.diag(_reacquire_inflation(s)))
         if method == "ekf":
-            st = gaussian.ekf_update(st, z, lambda x: proj(x[:3]), lambda x: np.hstack(
-                [proj.jacobian(x[:3]), np.zeros((2, 3))]), R)
+            st = gaussian.ekf_update(st, z, h, H_jac, R)
         elif method == "ukf":
-            st = gaussian.ukf_update(st, z, lambda X: proj(X[:, :3]), R, sp)
+            st = gaussian.ukf_update(st, z, h_sigma, R, sp)
         mean[k], cov[k] = st.x, st.P
-    return Estimates(mean, cov, None)
+    return Estimates(mean, cov, None, codes)
+
+
+def _reacquire_inflation(s: FuseSettings) -> np.ndarray:
+    """(6,) variances added to P's diagonal when a Gaussian filter re-acquires."""
+    return np.r_[np.full(3, s.reacquire_sigma_m**2), np.full(3, s.init_vel_sigma_m_s**2)]
 
 
 def _camera_arrays(proj: Projection) -> tuple[np.ndarray, np.ndarray]:
@@ -92,11 +109,12 @@ def _run_gaussian_compiled(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Pr
 
     st = inp.steps
     cam, dist = _camera_arrays(proj)
-    mean, cov = gaussian_kernel.run(
+    mean, cov, codes = gaussian_kernel.run(
         _f64(x0), _f64(P0), _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), float(st.q),
         cam, dist, float(s.pixel_sigma**2), gaussian_kernel.METHODS[method], sp.Wm, sp.Wc,
-        float(sp.n + sp.lam))
-    return Estimates(mean, cov, None)
+            float(sp.n + sp.lam), float(s.gate_chi2), int(s.reacquire_frames),
+        _reacquire_inflation(s))
+    return Estimates(mean, cov, None, codes)
 
 
 def _predict_particles(x: np.ndarray, st: Steps, k: int, ace: np.ndarray,
@@ -112,26 +130,30 @@ def _predict_particles(x: np.ndarray, st: Steps, k: int, ace: np.ndarray,
 def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
                   s: FuseSettings, arm: Arm | None, *, constrained: bool,
                   compiled: bool = True) -> Estimates:
-    """Bootstrap PF (eqs. 12-14), or the layered-sampling PF of section III-E, steps 1-7.
+    """Bootstrap PF (eqs. 12-14), or the layered-sampling PF of section III-E, steps 1-7, each
+    detection gated and pf-constraint re-seeded on the ray-sphere points when its colour layer
+    collapses or it re-acquires (fuse/robust.py).
 
     Particles are an (N, 6) array. After every resampling the weights are equal, so each
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
-    reference, to round-off (tests/test_pf_kernel.py)."""
+    reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py)."""
     from armtrack_cli.filters import sfc64  # numba's: imported only when a particle filter runs
 
     rng = sfc64.generator(s.seed)  # numpy's SFC64, which the kernel draws from inline
     N = s.particles
     x = rng.multivariate_normal(x0, P0, size=N)
-    if compiled:
-        return _run_particles_compiled(inp, x, rng, proj, s, arm, constrained)
     n_frames = inp.z.shape[0]
+    points = (robust.ray_sphere_points(proj, arm, inp.z, inp.q_WB) if constrained
+              else np.full((n_frames, 2, 3), np.nan))
+    if compiled:
+        return _run_particles_compiled(inp, x, rng, proj, s, arm, constrained, points)
     resample = scheme(s.resampling)
     w = np.full(N, 1.0 / N)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else None
     mean, cov, n_eff = np.empty((n_frames, 6)), np.empty((n_frames, 6, 6)), np.empty(n_frames)
-    inv2s2 = 0.5 / s.pixel_sigma**2
+    codes, run_gated = np.zeros(n_frames, np.int8), 0
     inv2c2 = 0.5 / s.constraint_sigma_m**2
     ace = inp.steps.noise_factors()
     seen = np.isfinite(inp.z).all(axis=1)
@@ -139,13 +161,22 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
         eps = rng.standard_normal((N, 12 if constrained else 6))
         if k > 0:  # step 1: particle prediction from p¹ (eq. 10)
             x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
-        z = inp.z[k] if seen[k] else None
-        if z is not None:  # step 2: weights from the colour-tracking likelihood (eq. 11)
-            d = proj(x[:, :3]) - z
-            w = weights(-inv2s2 * np.einsum("ij,ij->i", d, d), w)
+        if seen[k]:  # step 2: weights from the colour-tracking likelihood (eq. 11), gated
+            px = proj(x[:, :3])
+            codes[k], run_gated = robust.gate(
+                robust.pixel_mahalanobis2(px, w, inp.z[k], s.pixel_sigma**2), s.gate_chi2,
+                run_gated, s.reacquire_frames)
+            if codes[k] == robust.REACQUIRED:
+                robust.roughen(x, s.reacquire_sigma_m, s.init_vel_sigma_m_s,
+                               rng.standard_normal((N, 6)))
+                px = proj(x[:, :3])
+            if codes[k] != robust.GATED:
+                w = _colour_layer(x, px, w, inp.z[k], points[k], codes, k, proj, s, rng,
+                                  constrained)
+        used = codes[k] not in (robust.NONE, robust.GATED)
         n_eff[k] = ess(w)
         if constrained:
-            if z is not None:  # step 3 (without a detection the weights are still equal)
+            if used:  # step 3 (without a detection the weights are still equal)
                 x = x[resample(w, rng)]
             # step 4: random-walk layer p² (eq. 17, 18)
             x = x + eps[:, 6:] * walk
@@ -163,12 +194,33 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             if n_eff[k] < s.pf_resample_ess * N:
                 x = x[resample(w, rng)]
                 w = np.full(N, 1.0 / N)
-    return Estimates(mean, cov, n_eff)
+    return Estimates(mean, cov, n_eff, codes)
+
+
+def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
+                  points: np.ndarray, codes: np.ndarray, k: int, proj: Projection,
+                  s: FuseSettings, rng: np.random.Generator, constrained: bool) -> np.ndarray:
+    """Step 2's weights w ∝ w⁻ p(z | x) (eq. 11, 14) of the particles x (N, 6) whose pixels
+    are px; pf-constraint first re-seeds x in place on the two ray-sphere points if it
+    re-acquires or the weights collapse, and codes[k] says so (fuse/robust.py)."""
+    inv2s2 = 0.5 / s.pixel_sigma**2
+    w_new = weights(-inv2s2 * np.einsum("ij,ij->i", px - z, px - z), w)
+    n_seed = int(np.floor(s.reseed_share * x.shape[0] + 0.5))
+    if not constrained or n_seed == 0 or not (codes[k] == robust.REACQUIRED
+                                               or ess(w_new) < s.reseed_ess * x.shape[0]):
+        return w_new
+    m, c = moments(x[:, :3], w)  # the predicted cloud, before the colour weights
+    n0 = robust.branch_split(n_seed, points, m, c, s.reseed_prior_m)
+    robust.reseed(x, points, n0, s.reseed_sigma_m, rng.standard_normal((n_seed, 3)))
+    if codes[k] == robust.USED:
+        codes[k] = robust.RESEEDED
+    d = proj(x[:, :3]) - z
+    return weights(-inv2s2 * np.einsum("ij,ij->i", d, d), w)
 
 
 def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
-                            constrained: bool) -> Estimates:
+                            constrained: bool, points: np.ndarray) -> Estimates:
     from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import pf_kernel
 
@@ -178,13 +230,21 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
     state = sfc64.get_state(rng)
-    mean, cov, n_eff = pf_kernel.run(
+    mean, cov, n_eff, codes = pf_kernel.run(
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
-        float(s.pf_resample_ess))
+        float(s.pf_resample_ess), _guard(s, points))
     sfc64.set_state(rng, state)
-    return Estimates(mean, cov, n_eff)
+    return Estimates(mean, cov, n_eff, codes)
+
+
+def _guard(s: FuseSettings, points: np.ndarray) -> tuple:
+    """The kernel's gate and re-seeding arguments (pf_kernel.run)."""
+    return (_f64(points), float(s.pixel_sigma**2), float(s.gate_chi2), int(s.reacquire_frames),
+            int(np.floor(s.reseed_share * s.particles + 0.5)), float(s.reseed_ess),
+            float(s.reseed_sigma_m), float(s.reseed_prior_m),
+            np.r_[np.full(3, s.reacquire_sigma_m), np.full(3, s.init_vel_sigma_m_s)])
 
 
 def load_kernels(method: str) -> None:
@@ -211,11 +271,12 @@ def load_kernels(method: str) -> None:
     if method in ("ekf", "ukf", "inertial"):
         sp = gaussian.SigmaPoints(6)
         gaussian_kernel.run(x0, 1e-4 * np.eye(6), z, q, d3, d3, 0.0, cam, dist, 1.0,
-                            gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0)
+                            gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0, 13.8, 10,
+                            np.zeros(6))
     else:
         pf_kernel.run(np.zeros((10, 6)), sfc64.get_state(sfc64.generator(0)), z, q, d3, d3, d3,
                       d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
-                      1.0)
+                      1.0, _guard(FuseSettings(particles=10), np.zeros((2, 2, 3))))
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
@@ -272,4 +333,4 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimat
         return F, b, Q + walk + 1e-12 * np.eye(6)
 
     x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), steps=steps)
-    return Estimates(x, P, est.ess)
+    return Estimates(x, P, est.ess, est.codes)

@@ -11,6 +11,9 @@ from ``__pycache__`` afterwards.
 Shapes: particles x (N, 6) = (p, v) in W (m, m/s), held inside as its transpose xs (6, N) so
 that every pass over the particles runs along contiguous rows (SIMD); the normals likewise as
 eps (12, N), filled in the reference's draw order; z (n_frames, 2) px, NaN = no detection.
+The gate, roughening and re-seeding of fuse/robust.py draw their normals after eps, in the
+reference's order too (tests/test_gating.py holds kernel and reference equal with them active).
+The resampling schemes are in fuse/pf_resample_kernel.py.
 """
 
 from __future__ import annotations
@@ -18,106 +21,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from armtrack_cli.filters.sfc64 import fill_normals, fill_random
-from armtrack_cli.filters.sfc64 import random as uniform
+from armtrack_cli.filters.sfc64 import fill_normals
+from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
 
-RESAMPLING = {"residual": 0, "systematic": 1, "stratified": 2, "multinomial": 3}
-SUMS = {"reassoc"}  # sums over particles may be reordered (vectorised): round-off only
+__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
+
 # error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
 # whose check keeps LLVM from vectorising any loop that divides
-
-
-@njit(cache=True, error_model="numpy")
-def _search_sorted_keys(cdf, u, idx, start):
-    """idx[start + j] = min(#{cdf ≤ u_j}, N − 1) for sorted u: searchsorted(side="right")
-    by one merge walk."""
-    n, i = cdf.size, 0
-    for j in range(u.size):
-        while i < n and cdf[i] <= u[j]:
-            i += 1
-        idx[start + j] = min(i, n - 1)
-
-
-@njit(cache=True, error_model="numpy")
-def _sorted_uniforms(s, k, work, start):
-    """np.sort(rng.random(k)) into work[0, :k], by bucket sort, O(k) for uniforms: the same
-    array, faster. work (3, N) floats (rows: u, sorted, cdf), start (N + 1,) int."""
-    u, out, start = work[0, :k], work[1, :k], start[:k + 1]
-    fill_random(s, u)
-    start[:] = 0
-    for v in u:
-        start[int(v * k) + 1] += 1
-    for b in range(k):
-        start[b + 1] += start[b]
-    for v in u:
-        b = int(v * k)
-        out[start[b]] = v
-        start[b] += 1
-    for i in range(1, k):  # insertion sort: out of order only within a bucket
-        v, j = out[i], i - 1
-        while j >= 0 and out[j] > v:
-            out[j + 1] = out[j]
-            j -= 1
-        out[j + 1] = v
-    u[:] = out
-    return u
-
-
-@njit(cache=True, error_model="numpy")
-def _resample(w, s, scheme, idx, work, start):
-    """Ancestor indices into idx (N,), as filters/resampling.py, drawing the same uniforms;
-    work (3, N) and start (N + 1,) as _sorted_uniforms takes them."""
-    n = w.size
-    cdf = work[2]
-    if scheme == 0:  # residual: floor(N w_i) copies, then R leftovers (Liu & Chen 1998)
-        total, nw = _total(w), work[1]
-        for i in range(n):  # N w_i and its fractional part (SIMD)
-            nw[i] = n * (w[i] / total)
-            cdf[i] = nw[i] - np.floor(nw[i])
-        m, acc = 0, 0.0
-        for i in range(n):
-            for _ in range(np.int64(nw[i])):
-                idx[m] = i
-                m += 1
-            acc += cdf[i]
-            cdf[i] = acc
-        k = n - m
-        if k == 0:
-            return
-        u = _sorted_uniforms(s, k, work, start)
-        top = cdf[-1]
-        for j in range(k):
-            u[j] *= top
-        _search_sorted_keys(cdf, u, idx, m)
-        return
-    acc = 0.0
-    for i in range(n):
-        acc += w[i]
-        cdf[i] = acc
-    for i in range(n):
-        cdf[i] /= acc
-    if scheme == 3:  # multinomial, sorted draws
-        u = _sorted_uniforms(s, n, work, start)
-    else:
-        u = work[0, :n]
-        if scheme == 1:  # systematic: one offset for N evenly spaced points
-            u0 = uniform(s)
-            for i in range(n):
-                u[i] = (i + u0) / n
-        else:  # stratified: one uniform in each of N strata
-            fill_random(s, u)
-            for i in range(n):
-                u[i] = (i + u[i]) / n
-    _search_sorted_keys(cdf, u, idx, 0)
-
-
-@njit(cache=True, error_model="numpy")
-def _take(xs, idx, out):
-    """out = xs[:, idx] (the resampled particles, (6, N))."""
-    for j in range(6):
-        for i in range(idx.size):
-            out[j, i] = xs[j, idx[i]]
-
 
 # exp(x) for x ≤ 0 in SIMD: x = n ln2 + r, |r| ≤ ln2 / 2 (Cody & Waite's two-part ln2), e^r by
 # its Taylor series to r¹³ (truncation < 5e-18), 2^n from a table; within 1 ulp of np.exp
@@ -140,14 +50,6 @@ def exp_nonpositive(x, m, out):
         for j in range(12, -1, -1):
             p = p * r + _EXP_C[j]
         out[i] = p * _POW2[np.intp(-n)] if v == v else v
-
-
-@njit(cache=True, error_model="numpy", fastmath=SUMS)
-def _total(w):
-    s = 0.0
-    for v in w:
-        s += v
-    return s
 
 
 @njit(cache=True, error_model="numpy")
@@ -221,9 +123,10 @@ def _pixel(p0, p1, p2, cam, dist):
 
 
 @njit(cache=True, error_model="numpy")
-def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uniform, lw):
+def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uniform, lw, px):
     """Step 1, x_k ~ N(F x + b, Q) (eq. 10) with Q = L Lᵀ ⊗ I₃ from eps rows 0-5; step 2,
-    lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11) if z is seen. Returns whether it is."""
+    lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11) if z is seen, the pixels π(p_i) kept in
+    px (2, N) for the gate. Returns whether z is seen."""
     a, c, e = ace[k, 0], ace[k, 1], ace[k, 2]
     n = xs.shape[1]
     if k > 0:
@@ -238,6 +141,7 @@ def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uni
     ct, dt5, z0, z1 = _camera_tuple(cam), _dist_tuple(dist), z[0], z[1]  # in registers
     for i in range(n):
         u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
+        px[0, i], px[1, i] = u, v
         eu, ev = u - z0, v - z1
         lw[i] = -inv2s2 * (eu * eu + ev * ev)
     if uniform:  # a uniform prior: one log for all
@@ -276,12 +180,110 @@ def _walk_and_constrain(xs, eps, walk, centre, L1, inv2c2, lw):
         lw[i] = -inv2c2 * r * r
 
 
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _pixel_mahalanobis2(px, w, z, r2):
+    """robust.pixel_mahalanobis2: νᵀ S⁻¹ ν with ẑ = Σ wᵢ π(pᵢ), ν = z − ẑ,
+    S = Σ wᵢ (π(pᵢ) − ẑ)(π(pᵢ) − ẑ)ᵀ + r2 I; px (2, N) the particles' pixels."""
+    n = w.size
+    mu, mv = 0.0, 0.0
+    for i in range(n):
+        mu += w[i] * px[0, i]
+        mv += w[i] * px[1, i]
+    suu, suv, svv = r2, 0.0, r2
+    for i in range(n):
+        du, dv = px[0, i] - mu, px[1, i] - mv
+        suu += w[i] * du * du
+        suv += w[i] * du * dv
+        svv += w[i] * dv * dv
+    a, b = z[0] - mu, z[1] - mv
+    return (a * (svv * a - suv * b) + b * (suu * b - suv * a)) / (suu * svv - suv * suv)
+
+
+@njit(cache=True, error_model="numpy")
+def _reseed(xs, w_prior, points, sigma, prior_m, state, seed_eps, m, c, d):
+    """robust.branch_split and robust.reseed: particles 0..n0−1 onto points[0], the rest of
+    the n_seed = seed_eps.shape[1] onto points[1], ± sigma; n0 from the predicted cloud's
+    density at the two. seed_eps (3, n_seed), m (6,), c (6, 6), d (6, N) work."""
+    n_seed = seed_eps.shape[1]
+    _moments(xs, w_prior, m, c, d)
+    C = c[:3, :3] + prior_m**2 * np.eye(3)
+    q = np.empty(2)
+    for b in range(2):
+        v = points[b] - m[:3]
+        q[b] = v @ np.linalg.solve(C, v)
+    p0 = 1.0 / (1.0 + np.exp(min(0.5 * (q[0] - q[1]), 700.0)))
+    n0 = int(np.floor(n_seed * p0 + 0.5))
+    fill_normals(state, seed_eps.T)  # the reference's (n_seed, 3), row by row
+    for j in range(3):
+        for i in range(n_seed):
+            xs[j, i] = points[0 if i < n0 else 1, j] + sigma * seed_eps[j, i]
+
+
+@njit(cache=True, error_model="numpy")
+def _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw):
+    """lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11), as in _predict_and_weigh."""
+    ct, dt5 = _camera_tuple(cam), _dist_tuple(dist)
+    for i in range(xs.shape[1]):
+        u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
+        eu, ev = u - z[0], v - z[1]
+        lw[i] = -inv2s2 * (eu * eu + ev * ev) + np.log(w_prior[i])
+
+
+@njit(cache=True, error_model="numpy")
+def _gate_code(d2, gate, run_gated, reacquire):
+    """robust.gate: (code, run) — 1 used, 2 gated, 3 re-acquired (then a grace, run < 0)."""
+    if run_gated < 0:
+        return 1, run_gated + 1
+    if gate <= 0 or d2 <= gate:
+        return 1, 0
+    if run_gated < reacquire:
+        return 2, run_gated + 1
+    return 3, -reacquire
+
+
+@njit(cache=True, error_model="numpy")
+def _roughen(xs, sd, state, eps):
+    """robust.roughen: x_ij ± sd_j for every particle (the re-acquisition's spread); eps (6, N)
+    work, filled as the reference's (N, 6)."""
+    fill_normals(state, eps.T)
+    for j in range(6):
+        for i in range(xs.shape[1]):
+            xs[j, i] += sd[j] * eps[j, i]
+
+
+@njit(cache=True, error_model="numpy")
+def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_gated, guard,
+                    constrained, w_prior, xr, seed_eps, m6, c6):
+    """methods.run_particles' step 2 after the gate (fuse/robust.py): the χ² gate on the
+    predicted pixels px, then (unless gated) w ∝ w⁻ p(z | x), roughened first if it
+    re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated)."""
+    points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
+    codes[k], run_gated = _gate_code(_pixel_mahalanobis2(px, w, z, r2), gate, run_gated,
+                                     reacquire)
+    if codes[k] == 2:
+        return False, run_gated
+    w_prior[:] = w
+    if codes[k] == 3:  # re-acquired: spread the cloud first (xr: work)
+        _roughen(xs, rough, state, xr)
+        _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
+    _normalise(lw, w)
+    N = w.size
+    if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / _sum_sq(w) < reseed_ess * N):
+        _reseed(xs, w_prior, points[k], reseed_sigma, prior_m, state, seed_eps, m6, c6, xr)
+        codes[k] = 4 if codes[k] == 1 else codes[k]
+        _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
+        _normalise(lw, w)
+    return True, run_gated
+
+
 @njit(cache=True, error_model="numpy")
 def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
-        constrained, scheme, resample_ess):
+        constrained, scheme, resample_ess, guard):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
     (eqs. 12-14). x (N, 6) the initial particles; state (4,) the SFC64 state (advanced);
-    returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,)."""
+    ``guard`` = (points (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess,
+    reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py.
+    Returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
     n_frames, N = z.shape[0], x.shape[0]
     mean = np.empty((n_frames, 6))
     cov = np.empty((n_frames, 6, 6))
@@ -289,15 +291,22 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     xs, xr = np.ascontiguousarray(x.T), np.empty((6, N))
     w, lw = np.full(N, 1.0 / N), np.empty(N)
     eps = np.empty((12 if constrained else 6, N))
+    codes = np.zeros(n_frames, np.int8)
+    w_prior, px = np.empty(N), np.empty((2, N))
+    seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
     idx = np.empty(N, np.int64)
     work, start = np.empty((3, N)), np.empty(N + 1, np.int64)
     uniform = True  # every w_i is exactly 1/N
+    run_gated = 0
     for k in range(n_frames):
         fill_normals(state, eps.T)  # the reference's eps (N, 12), row by row
         seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
-                                  uniform, lw)
+                                  uniform, lw, px)
+        if seen:  # the χ² gate, roughening and re-seeding
+            seen, run_gated = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw, px,
+                                              codes, run_gated, guard, constrained, w_prior,
+                                              xr, seed_eps, m6, c6)
         if seen:
-            _normalise(lw, w)
             uniform = False
         n_eff[k] = 1.0 / _sum_sq(w)
         if constrained:
@@ -318,7 +327,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
         xs, xr = xr, xs
         w[:] = 1.0 / N
         uniform = True
-    return mean, cov, n_eff
+    return mean, cov, n_eff, codes
 
 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)

@@ -33,6 +33,18 @@ class FuseSettings:
     ukf_alpha: float = 0.5
     ukf_beta: float = 2.0
     ukf_kappa: float = 0.0
+    gate_chi2: float = 13.8  # χ²(2) at 99.9 %: a detection whose innovation Mahalanobis²
+    #                         exceeds it is not used (counted as gated); 0 turns gating off.
+    #                         Every method's camera update, arm-smoother's included
+    reacquire_frames: int = 10  # this many gated detections in a row and the next one is used
+    #                             anyway, the filter re-acquired (fuse/robust.py says how)
+    reacquire_sigma_m: float = 0.10  # Gaussian filters: position SD added on re-acquiring
+    reseed_share: float = 0.5  # pf-constraint: share of particles re-seeded on the ray-sphere
+    #                            intersections when the colour layer collapses or re-acquires
+    reseed_ess: float = 0.01  # ... collapse: ESS after the colour weights below this × N
+    reseed_sigma_m: float = 0.005  # spread of the re-seeded particles about an intersection
+    reseed_prior_m: float = 0.05  # SD added to the predicted cloud's when it weighs the two
+    #                               intersections against each other
     smoother: str = "rts"  # offline fixed-interval smoothing of the filtered estimates; the
     #                        tao2008-* recipes set "none" to reproduce the paper's filters
     seed: int = 0
@@ -50,8 +62,6 @@ class FuseSettings:
     shoulder: str = "fixed"  # "fixed" (Tao & Hu) or "drifting": a shoulder state that wanders
     shoulder_sd_m: float = 0.03  # … by about this much (per axis) about the declared shoulder
     shoulder_tau_s: float = 5.0  # … with this correlation time
-    gate_chi2: float = 13.8  # a detection whose innovation Mahalanobis² exceeds this is not
-    #                          used (χ², 2 degrees of freedom, p = 0.001)
 
 
 def checked(s: FuseSettings, where: str) -> FuseSettings:
@@ -68,6 +78,11 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
     if s.smoother not in SMOOTHERS:
         raise ConfigError(where, f"[fuse] smoother = {s.smoother!r} is not a smoother",
                           did_you_mean(s.smoother, SMOOTHERS, what="smoothers"))
+    if not (s.gate_chi2 >= 0 and s.reacquire_frames >= 1 and 0 <= s.reseed_share <= 1
+            and s.reseed_ess >= 0 and s.reseed_sigma_m >= 0 and s.reseed_prior_m >= 0):
+        raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_* are out of range",
+                          "gate_chi2 ≥ 0 (0: off), reacquire_frames ≥ 1, 0 ≤ reseed_share ≤ 1, "
+                          "reseed_ess, reseed_sigma_m, reseed_prior_m ≥ 0")
     for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS)):
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",

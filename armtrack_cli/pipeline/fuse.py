@@ -15,7 +15,7 @@ from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
 from armtrack_cli.core.methods import DEFAULT_FOR_KIND, NEEDS, PALM_METHODS
-from armtrack_cli.fuse import models
+from armtrack_cli.fuse import models, robust
 from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
@@ -151,8 +151,9 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         table = blank(table, far)
         warnings.warn(f"{dest / name}: {far.sum()} of {len(far)} frames put the wrist where no "
                       f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
+    guards = detection_counts(est.codes)
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
-                "frames_beyond_reach": int(far.sum()), **(est.summary or {}),
+                "frames_beyond_reach": int(far.sum()), **guards, **(est.summary or {}),
                 **({"arm_auto": auto.as_dict()} if auto else {}),
                 "imu_offset_s": p.imu_offset}
     q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
@@ -168,6 +169,15 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),
             "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
             "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how,
-            "frames_beyond_reach": int(far.sum()), **(est.summary or {}),
+            "frames_beyond_reach": int(far.sum()), **guards, **(est.summary or {}),
             **({"arm_auto": auto.as_dict()} if auto else {}),
             "imu_offset_s": p.imu_offset}
+
+
+def detection_counts(codes: np.ndarray | None) -> dict[str, int]:
+    """How many detections the gate kept out, how often the filter re-acquired and how often
+    pf-constraint re-seeded (fuse/robust.py); the inertial method uses none."""
+    if codes is None:
+        return {}
+    n = {name: int(np.sum(codes == c)) for c, name in robust.CODE_NAMES.items()}
+    return {"gated_frames": n["gated"], "reacquired": n["reacquired"], "reseeded": n["reseeded"]}
