@@ -88,15 +88,19 @@ def exp_so3(phi: np.ndarray) -> np.ndarray:
     return out.reshape(-1, 3, 3)
 
 
+def rodrigues_coefficients(th2: float) -> tuple[float, float, float]:
+    """(sin θ/θ, (1 − cos θ)/θ², cos θ) of exp(φ^) = c I + a φ^ + b φφᵀ for θ² = |φ|², by
+    their series below θ = 1e-4 (the compiled palm kernel uses this same function)."""
+    if th2 < 1e-8:
+        return 1.0 - th2 / 6.0, 0.5 - th2 / 24.0, 1.0 - th2 / 2.0
+    th = math.sqrt(th2)
+    return math.sin(th) / th, (1.0 - math.cos(th)) / th2, math.cos(th)
+
+
 def _exp_one(phi: np.ndarray) -> np.ndarray:
     """exp_so3 of one rotation vector, in plain floats (the filter's per-step corrections)."""
     x, y, z = float(phi[0]), float(phi[1]), float(phi[2])
-    th2 = x * x + y * y + z * z
-    if th2 < 1e-8:
-        a, b, c = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0, 1.0 - th2 / 2.0
-    else:
-        th = math.sqrt(th2)
-        a, b, c = math.sin(th) / th, (1.0 - math.cos(th)) / th2, math.cos(th)
+    a, b, c = rodrigues_coefficients(x * x + y * y + z * z)
     return np.array([[c + b * x * x, b * x * y - a * z, b * x * z + a * y],
                      [b * x * y + a * z, c + b * y * y, b * y * z - a * x],
                      [b * x * z - a * y, b * y * z + a * x, c + b * z * z]])

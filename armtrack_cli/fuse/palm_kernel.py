@@ -17,20 +17,19 @@ import math
 import numpy as np
 from numba import njit
 
+from armtrack_cli.filters.manifold_ukf import rodrigues_coefficients
+
 D, NOISE = 12, 6
 MEAN_TOL2 = 1e-7**2  # manifold_ukf.MEAN_TOL_RAD squared
 MEAN_MAX_ITER = 20
+
+_rodrigues = njit(cache=True)(rodrigues_coefficients)
 
 
 @njit(cache=True)
 def _exp(x, y, z, out):
     """Rodrigues, exp(φ^) (manifold_ukf.exp_so3, series for θ < 1e-4)."""
-    th2 = x * x + y * y + z * z
-    if th2 < 1e-8:
-        a, b, c = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0, 1.0 - th2 / 2.0
-    else:
-        th = math.sqrt(th2)
-        a, b, c = math.sin(th) / th, (1.0 - math.cos(th)) / th2, math.cos(th)
+    a, b, c = _rodrigues(x * x + y * y + z * z)
     out[0, 0], out[0, 1], out[0, 2] = c + b * x * x, b * x * y - a * z, b * x * z + a * y
     out[1, 0], out[1, 1], out[1, 2] = b * x * y + a * z, c + b * y * y, b * y * z - a * x
     out[2, 0], out[2, 1], out[2, 2] = b * x * z - a * y, b * y * z + a * x, c + b * z * z
