@@ -99,8 +99,8 @@ def page_one(r: SessionReport):
         y = layout.text_block(fig, 0.07, 0.90, [
             f"Subject: {r.subject}        Session: {r.session_id}        Date: {r.date or 'not recorded'}",
             f"Task: {words.task_name(r.task)}        Side: {r.side} {'hand' if r.kind == 'palm' else 'arm'}",
-            f"Tracking method: {words.method_name(r.method, source=True)}"
-            + (f", named {r.method} in the tables" if r.method else ""),
+            f"Tracking method: {words.method_name(r.method, source=True)}",
+            *([f"    (named {r.method} in the tables)"] if r.method else []),
         ], size=10, step=0.022)
         fig.text(0.07, y - 0.01, "Key measures (± the uncertainty the tracking gives)",
                  fontsize=11.5, weight="bold", va="top")
