@@ -29,6 +29,10 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
     detections on the session clock (NaN = none)."""
     declared = session.sync.imu_offset_s != "auto"
     centre = float(session.sync.imu_offset_s) if declared else 0.0
+    if declared and session.arm is not None and session.arm.auto:
+        # the check takes its depths from the arm, which fuse estimates only after the offset
+        return centre, {"value": centre, "from": "declared",
+                        "unchecked": '[arm] is "auto": estimated after the offset'}
     problem = SyncProblem(t_imu, a_W, q_WB, t_frames, uv, proj, arm)
     off = estimate_imu_offset(problem, centre_s=centre,
                               search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S)
