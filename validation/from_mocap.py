@@ -24,6 +24,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from armtrack_cli import pipeline  # noqa: E402
+from armtrack_cli.core.errors import ArmtrackError  # noqa: E402
 from armtrack_cli.session.arm_file import read_arm_estimate  # noqa: E402
 from armtrack_cli.simulate.arm_session import ArmSimSettings  # noqa: E402
 from armtrack_cli.simulate.from_mocap import MocapSimSettings  # noqa: E402
@@ -61,12 +62,18 @@ def smoother_row(name: str, what: str, folder: Path) -> str:
     one, with the declared arm and with the "auto" arm (wrist 3-D RMSE, cm; goal ≤ 1.5 with
     the drifting shoulder)."""
     auto_folder = folder.parent / f"{folder.name}-auto"
-    v = [wrist_rmse(folder, "arm-smoother", out=folder / "smoother-fixed"),
-         wrist_rmse(folder, "arm-smoother", DRIFT, out=folder / "smoother-drifting"),
-         wrist_rmse(auto_folder, "arm-smoother", out=auto_folder / "smoother-fixed"),
-         wrist_rmse(auto_folder, "arm-smoother", DRIFT, out=auto_folder / "smoother-drifting")]
-    return f"| {name} | {what} | " + " | ".join(f"{x:.2f}" for x in v) + \
-        f" | {'yes' if min(v[1], v[3]) <= 1.5 else 'no'} |"
+    runs = [(folder, (), "smoother-fixed"), (folder, DRIFT, "smoother-drifting"),
+            (auto_folder, (), "smoother-fixed"), (auto_folder, DRIFT, "smoother-drifting")]
+    v, why = [], ""
+    for f, sets, sub in runs:
+        try:
+            v.append(wrist_rmse(f, "arm-smoother", sets, out=f / sub))
+        except ArmtrackError as e:  # a stage refused: not computable, and why, below the table
+            v.append(float("nan"))
+            why = f" ({e})"
+    cells = " | ".join("—" if np.isnan(x) else f"{x:.2f}" for x in v)
+    met = min((x for x in (v[1], v[3]) if not np.isnan(x)), default=np.inf) <= 1.5
+    return f"| {name} | {what} | {cells} | {'yes' if met else 'no'}{why} |"
 
 
 SMOOTHER = ["| session | motion | fixed shoulder, declared arm | drifting shoulder, declared arm "
@@ -124,7 +131,10 @@ def main() -> None:
                 folder = Path(tmp) / trial
                 pipeline.simulate_from_mocap(folder, UE_ADL / f"ADL001{trial}.csv",
                                              MocapSimSettings())
-                mocap.append(row(trial, what, one(folder), real=True))
+                try:
+                    mocap.append(row(trial, what, one(folder), real=True))
+                except ArmtrackError as e:  # a stage refused this session: say why, go on
+                    mocap.append(f"| {trial} | {what} | not computable: {e} |||||||")
                 smoother.append(smoother_row(trial, what, folder))
                 print(mocap[-1], smoother[-1], sep="\n", file=sys.stderr)
         for task in ("circle", "rectangle", "reach", "figure8"):
