@@ -42,3 +42,18 @@ def test_bad_input_gives_one_clear_line(tmp_path, name):
     assert case["expect"] in line, line
     assert sorted(p.relative_to(folder) for p in folder.rglob("*")) == before
     assert not out.exists()
+
+
+def test_palm_blobs_with_a_damaged_row_name_the_file(tmp_path):
+    """A palm detections.csv whose row is text, or whose frame is not whole: one DataError
+    naming the file (it used to be an internal TypeError)."""
+    from armtrack_cli.core.errors import DataError
+    from armtrack_cli.session.palm_io import read_palm_blobs
+
+    head = "frame,t,blob,u,v,area\n0,0.0,0,10.5,20.5,30\n"
+    for bad, why in (("garbage,x,,,,\n", "not a number"), ("1.5,0.03,0,1,1,1\n", "whole frame")):
+        p = tmp_path / "detections.csv"
+        p.write_text(head + bad)
+        with pytest.raises(DataError, match=why) as e:
+            read_palm_blobs(p, n_frames=5)
+        assert "detections.csv" in str(e.value)

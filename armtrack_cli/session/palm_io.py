@@ -51,11 +51,19 @@ def read_palm_blobs(path: Path, n_frames: int) -> list[np.ndarray]:
     area (px²)."""
     df = read_csv_table(path, ("frame", "t", "blob", "u", "v", "area"),
                         "run `armtrack detect SESSION` first (palm sessions)")
-    f = df["frame"].to_numpy()
+    try:
+        f = df["frame"].to_numpy(dtype=float)
+        uv = df[["u", "v", "area"]].to_numpy(dtype=float)
+    except (TypeError, ValueError):
+        raise DataError(path, "has a row whose frame, u, v or area is not a number",
+                        "run `armtrack detect SESSION` again") from None
+    if not (np.isfinite(f).all() and (f == np.round(f)).all()):
+        raise DataError(path, "has a row without a whole frame number",
+                        "run `armtrack detect SESSION` again")
+    f = f.astype(np.int64)
     if f.size and (f.min() < 0 or f.max() >= n_frames):
         raise DataError(path, f"names frame {int(f.max())} but the video has {n_frames} frames",
                         "run `armtrack detect SESSION` again")
-    uv = df[["u", "v", "area"]].to_numpy(dtype=float)
     if not np.isfinite(uv).all():
         raise DataError(path, "has blobs without pixels (u, v)")
     order = np.argsort(f, kind="stable")
