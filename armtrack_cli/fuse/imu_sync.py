@@ -31,6 +31,13 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
 from armtrack_cli.fuse import models
+from armtrack_cli.fuse.drift_ls import (
+    Drift,
+    SplineRows,
+    banded_solver,
+    fit_with_scale,
+    normal_parts,
+)
 
 WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
 KNOT_S = 2.0  # s between the drift spline's knots: the orientation error's gravity leak
@@ -73,9 +80,11 @@ def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
     out = np.full(x.shape, np.nan)
     if x.shape[0] < window:
         return out
-    idx = np.arange(h, x.shape[0] - h)
-    stack = np.stack([x[idx - h + j] for j in range(window)], axis=0)  # (window, m, d)
-    out[idx] = np.tensordot(c, stack, axes=(0, 0))
+    m = x.shape[0] - 2 * h
+    acc = out[h:h + m]  # Σ_j c_j x[k − h + j], on views (a NaN in the window stays NaN)
+    acc[...] = c[0] * x[:m]
+    for j in range(1, window):
+        acc += c[j] * x[j:j + m]
     return out
 
 
@@ -83,7 +92,7 @@ def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
 class _Prepared:
     vel_img: np.ndarray  # (n, 2) px/s, the detections' velocity (NaN = none)
     J: np.ndarray  # (n, 2, 3) px/m
-    drift: np.ndarray  # (n, m) the drift's spline basis at the frames
+    drift: SplineRows  # (n, m) the drift's spline basis at the frames
     v_imu: object  # t -> (…, 3) m/s, ∫ a_W dt on the IMU's clock: cubic Hermite (dv/dt = a_W)
     dt: float  # frame period, s
     window: int
@@ -161,7 +170,7 @@ def _bridge(x: np.ndarray, most: int) -> np.ndarray:
     return out
 
 
-def _spline_basis(t: np.ndarray) -> np.ndarray:
+def _spline_basis(t: np.ndarray) -> SplineRows:
     """(n, m) quartic B-splines, knots KNOT_S apart over t: the integrals of cubic splines
     (plus a constant), i.e. the velocity drift of a smoothly varying acceleration error."""
     from scipy.interpolate import BSpline
@@ -169,7 +178,10 @@ def _spline_basis(t: np.ndarray) -> np.ndarray:
     k = DRIFT_DEGREE
     inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / KNOT_S)) + 1))
     knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
-    return BSpline.design_matrix(np.clip(t, inner[0], inner[-1]), knots, k).toarray()
+    # k + 1 non-zeros a row, kept as such (fuse/drift_ls.py): dense, a 60-minute session's
+    # basis would be 1.6 GB
+    return SplineRows.from_csr(
+        BSpline.design_matrix(np.clip(t, inner[0], inner[-1]), knots, k).tocsr(), k + 1)
 
 
 def _fill(x: np.ndarray) -> np.ndarray:
@@ -191,19 +203,10 @@ def predicted(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
     return _savgol(np.einsum("kij,kj->ki", pre.J, v), pre.window, 0, pre.dt)
 
 
-def _design(pre: _Prepared, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The drift's columns D (2·n_ok, 3·m) = J_k B_m(t_k) per axis, and y = u̇ (2·n_ok,)."""
-    B = pre.drift[ok]
-    B = B[:, B.any(axis=0)]
-    J = pre.J[ok]
-    D = np.hstack([(J[:, :, a, None] * B[:, None, :]).reshape(-1, B.shape[1]) for a in range(3)])
-    return D, pre.vel_img[ok].reshape(-1)
-
-
-def _gram(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Aᵀ B by einsum: these products are small, and a threaded BLAS on a busy machine spends
-    longer waking its threads than multiplying."""
-    return np.einsum("ki,k...->i...", A, B)
+def _design(pre: _Prepared, ok: np.ndarray) -> tuple[Drift, np.ndarray]:
+    """The drift's columns D (2·n_ok, 3·m) = J_k B_m(t_k) per axis (banded: fuse/drift_ls.py),
+    and y = u̇ (n_ok, 2)."""
+    return Drift(pre.drift[ok], pre.J[ok]), pre.vel_img[ok]
 
 
 def _mask(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[np.ndarray, np.ndarray]:
@@ -221,17 +224,15 @@ def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray | None = N
     elif not usable[ok].all():
         return None, 0, ok
     D, y = _design(pre, ok)
-    X = np.hstack([V[ok].reshape(-1, 1), D])
-    theta = np.linalg.solve(_gram(X, X) + 1e-9 * np.eye(X.shape[1]), _gram(X, y))
-    return (y - X @ theta).reshape(-1, 2), X.shape[1], ok
+    return fit_with_scale(D, V[ok], y), 1 + D.used, ok
 
 
 def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
          frames: np.ndarray | None = None) -> float:
     """Mean squared residual of the fit (_fit); inf with too little overlap. The drift's
     normal equations are reused while the frames used stay the same (``cache``): with
-    G = DᵀD = L Lᵀ, the residual sum is yᵀy − ‖L⁻¹Dᵀy‖² − b² / s, where
-    s = VᵀV − ‖L⁻¹DᵀV‖² and b = Vᵀy − (L⁻¹DᵀV)ᵀ(L⁻¹Dᵀy) (the scale's column eliminated last)."""
+    G = DᵀD (factored once), the residual sum is yᵀy − (Dᵀy)ᵀG⁻¹Dᵀy − b² / s, where
+    s = VᵀV − (DᵀV)ᵀG⁻¹DᵀV and b = Vᵀy − (DᵀV)ᵀG⁻¹Dᵀy (the scale's column eliminated last)."""
     V, ok = _mask(p, pre, delta)
     if frames is not None:  # the same frames at every δ (a refinement's), when all usable
         if not ok[frames].all():
@@ -242,14 +243,32 @@ def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
         return np.inf
     if cache.get("ok") is None or not np.array_equal(cache["ok"], ok):
         D, y = _design(pre, ok)
-        L = np.linalg.cholesky(_gram(D, D) + 1e-9 * np.eye(D.shape[1]))
-        Dy = np.linalg.solve(L, _gram(D, y))
-        cache.update(ok=ok, D=D, L=L, y=y, Dy=Dy, base=float(y @ y - Dy @ Dy))
-    v = V[ok].reshape(-1)
-    DV = np.linalg.solve(cache["L"], _gram(cache["D"], v))
-    sv = float(v @ v - DV @ DV)
-    b = float(v @ cache["y"] - DV @ cache["Dy"])
+        G, Dy, yy = _normal_update(pre, cache, ok)
+        solve = banded_solver(G)
+        Gy = solve(Dy)
+        cache.update(ok=ok, D=D, G=G, Dy=Dy, yy=yy, solve=solve, y=y, Gy=Gy,
+                     base=yy - Dy @ Gy)
+    v = V[ok]
+    DV = cache["D"].t(v)
+    sv = float(np.sum(v * v) - DV @ cache["solve"](DV))
+    b = float(np.sum(v * cache["y"]) - DV @ cache["Gy"])
     return (cache["base"] - (b * b / sv if sv > 0 and b > 0 else 0.0)) / n  # c > 0: a range
+
+
+def _normal_update(pre: _Prepared, cache: dict, ok: np.ndarray):
+    """DᵀD (banded), Dᵀy and yᵀy over the frames ``ok``: the cached ones' plus the frames
+    added less those dropped, when few changed (the grid's next δ moves the overlap's ends by
+    a frame or two), else summed afresh."""
+    def parts(m):
+        return normal_parts(pre.drift[m], pre.J[m], pre.vel_img[m])
+
+    old = cache.get("ok")
+    if old is not None:
+        add, drop = ok & ~old, old & ~ok
+        if add.sum() + drop.sum() < 0.1 * ok.sum():
+            (Ga, ya, sa), (Gd, yd, sd) = parts(add), parts(drop)
+            return cache["G"] + Ga - Gd, cache["Dy"] + ya - yd, cache["yy"] + sa - sd
+    return parts(ok)
 
 
 def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: float = 3.0
