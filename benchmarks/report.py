@@ -80,7 +80,8 @@ def write_report(res: dict, path: Path) -> str:
     L += ["", "Growth with session length: "
           + _linear([sec / n for _, n, sec in res["scaling"]]) + "."]
     for minutes, rows in res["e2e"].items():
-        L += _end_to_end(minutes, rows)
+        L += _end_to_end(minutes, rows, res["default"])
+    L += _memory(res)
     text = "\n".join(L) + "\n"
     path.write_text(text)
     return text
@@ -103,20 +104,40 @@ def _passes(rows, pfc) -> list[str]:
                 f"frames/s, is 33.3 µs per frame."]
 
 
-def _end_to_end(minutes: float, rows) -> list[str]:
-    """The table of one end-to-end run: each stage's time, share and peak memory."""
+def _end_to_end(minutes: float, rows, method: str) -> list[str]:
+    """The table of one end-to-end run: each stage's time, its ratio to decoding the video
+    once (the reference, measured in the same run), share and peak memory, and the load."""
     ref = rows[0][1]
-    total = sum(sec for _, sec, _, _ in rows[1:])
-    peak = max(mb for _, _, mb, _ in rows[1:])
+    total = sum(r[1] for r in rows[1:])
+    peak = max(r[2] for r in rows[1:])
     L = ["", f"## A {minutes:g}-minute session end to end ({int(minutes * 1800)} frames, "
-         f"{int(minutes * 6000)} IMU samples), default method", "",
-         "| stage | seconds | share | peak memory (MB) |", "|---|---|---|---|"]
-    for name, sec, mb, err in rows:
+         f"{int(minutes * 6000)} IMU samples), default method {method}", "",
+         "Each stage in a fresh process (`pipeline.STAGE(SESSION)`: its imports included), its "
+         "peak resident memory (VmHWM); the load average (1 min) after each.", "",
+         "| stage | seconds | × decode-only | share | peak memory (MB) | load |",
+         "|---|---|---|---|---|---|"]
+    for name, sec, mb, err, load in rows:
         share = "—" if name.startswith("decode") else f"{100 * sec / total:.0f} %"
-        L.append(f"| {name} | {sec:.1f} | {share} | {mb:.0f} |" if not err else
-                 f"| {name} | failed: {err} | | |")
-    L.append(f"| calibrate → compare | {total:.1f} | 100 % | {peak:.0f} |")
+        L.append(f"| {name} | {sec:.1f} | {sec / ref:.2f} | {share} | {mb:.0f} | {load:.1f} |"
+                 if not err else f"| {name} | failed: {err} | | | | {load:.1f} |")
+    L.append(f"| calibrate → compare | {total:.1f} | {total / ref:.2f} | 100 % | {peak:.0f} | |")
     return L + ["", f"calibrate → compare: {total:.1f} s, {total / ref:.2f}× decoding the video "
                 f"once (goal ≤ 15 s for 10 minutes and ≤ 1.5×: "
                 f"{_met(total / ref <= 1.5 and (minutes != 10 or total <= 15))}); peak memory "
                 f"{peak:.0f} MB (goal ≤ 300 MB: {_met(peak <= 300)})."]
+
+
+def _memory(res) -> list[str]:
+    """Peaks of the end-to-end runs side by side (flat: the longest no higher), and the
+    import floor that bounds them."""
+    L = []
+    peaks = {m: max(r[2] for r in rows[1:]) for m, rows in res["e2e"].items()}
+    if len(peaks) > 1:
+        lo, hi = min(peaks), max(peaks)
+        L += ["", f"Peak memory with session length: {peaks[lo]:.0f} MB at {lo:g} minutes, "
+              f"{peaks[hi]:.0f} MB at {hi:g} (goal: flat, the longer no higher: "
+              f"{_met(peaks[hi] <= peaks[lo] * 1.05)})."]
+    L += ["", "### What a process holds after its imports alone (peak resident MB, a fresh "
+          "process each)", "", "| imports | MB |", "|---|---|"]
+    L += [f"| `{what}` | {mb:.0f} |" for what, mb in res["floor"]]
+    return L

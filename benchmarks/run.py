@@ -168,9 +168,8 @@ def stage(code: str) -> tuple[float, float, str]:
 
     # VmHWM: this process's peak resident memory (ru_maxrss would carry the parent's peak
     # across the exec)
+    # the stage's own imports only (armtrack_cli.pipeline loads each stage on first use)
     prog = ("import re, sys, time; from armtrack_cli import pipeline; "
-            "from armtrack_cli.session.video import iter_frames, probe_video; "
-            "from armtrack_cli.simulate.arm_session import ArmSimSettings; "
             "t = time.perf_counter(); " + code + "; print(time.perf_counter() - t, int(re.search("
             "r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read()).group(1)) / 1024)")
     r = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True,
@@ -185,16 +184,40 @@ def stage(code: str) -> tuple[float, float, str]:
 
 def end_to_end(tmp: str, minutes: float) -> list[tuple]:
     """A session through every stage with the default method, each stage in its own process
-    so its peak memory is its own; and decoding its video once, the reference."""
-    keep = os.environ.get("BENCH_SESSIONS")  # a folder where the long sessions are kept
-    folder = str(Path(keep or tmp) / f"long-{minutes:g}")
-    if not (keep and (Path(folder) / "video.mp4").exists()):  # simulating is slow: reuse
-        stage(f"pipeline.simulate({folder!r}, ArmSimSettings(duration_s={minutes * 60}))")
+    so its peak memory is its own; and decoding its video once, the reference. The session
+    is simulated once per simulator version (benchmarks/sessions.py: build/bench-sessions/);
+    BENCH_SESSIONS=DIR takes DIR/long-MINUTES instead where it exists."""
+    import shutil
+
+    from sessions import long_session
+
+    keep = Path(os.environ.get("BENCH_SESSIONS", "/nonexistent")) / f"long-{minutes:g}"
+    cached = keep if (keep / "video.mp4").exists() else long_session(minutes, env=_ENV)
+    folder = str(Path(tmp) / f"long-{minutes:g}")  # outputs in tmp, the session left as it is
+    shutil.rmtree(folder, ignore_errors=True)
+    Path(folder).mkdir()
+    for f in cached.iterdir():
+        if f.is_file():
+            os.symlink(f, Path(folder) / f.name)
     video = str(Path(folder) / "video.mp4")
-    rows = [("decode the video once (reference)",
-             *stage(f"sum(1 for _ in iter_frames(probe_video({video!r})))"))]
+    rows = [("decode the video once (reference)", *stage(
+        "from armtrack_cli.session.video import iter_frames, probe_video; "
+        f"sum(1 for _ in iter_frames(probe_video({video!r})))"), os.getloadavg()[0])]
     for name in ("calibrate", "detect", "fuse", "compare"):
-        rows.append((name, *stage(f"pipeline.{name}({folder!r})")))
+        rows.append((name, *stage(f"pipeline.{name}({folder!r})"), os.getloadavg()[0]))
+    return rows
+
+
+def import_floor() -> list[tuple[str, float]]:
+    """Peak resident memory (MB) of a fresh process that only imports: each library fuse
+    needs alone, and each stage's module (what it holds before reading a byte)."""
+    rows = []
+    for what, code in [("python", "pass"), ("numpy", "import numpy"), ("cv2", "import cv2"),
+                       ("pandas", "import pandas"), ("scipy.signal", "import scipy.signal"),
+                       ("numba", "import numba")] + [
+            (f"armtrack_cli.pipeline.{st}", f"from armtrack_cli import pipeline; pipeline.{st}")
+            for st in ("calibrate", "detect", "fuse", "compare")]:
+        rows.append((what, stage(code)[1]))
     return rows
 
 
@@ -219,12 +242,15 @@ def main() -> None:
         res["scaling"] = scaling_rows(inp, proj, arm, x0, P0, s)
         res["user"] = user_rows(folder, out)
         res["e2e"] = {m: end_to_end(tmp, m) for m in minutes}
+        res["floor"] = import_floor()
     libs = ", ".join(f"{p} {version(p)}" for p in ("numpy", "scipy", "numba",
                                                    "opencv-python-headless", "filterpy"))
     res["machine"] = (f"{cpu()}, {os.cpu_count()} logical CPUs, Python "
                       f"{platform.python_version()}; {libs}; load average (5 min) "
                       f"{load0:.1f} at the start, {os.getloadavg()[1]:.1f} at the end")
     res["paper"] = PAPER_S_PER_FRAME
+    from armtrack_cli.core.methods import DEFAULT_FOR_KIND
+    res["default"] = DEFAULT_FOR_KIND["arm"]
     text = write_report(res, REPO / "docs" / "benchmarks.md")
     print(text)
 

@@ -24,20 +24,52 @@ compare measures the truth beside them), filters/ (Kalman, unscented, particle),
 quaternions, errors, the method list).
 """
 
-from armtrack_cli.pipeline.batch import run_many
-from armtrack_cli.pipeline.calibrate import calibrate
-from armtrack_cli.pipeline.compare import compare
-from armtrack_cli.pipeline.detect import detect
-from armtrack_cli.pipeline.export import export
-from armtrack_cli.pipeline.fuse import fuse
-from armtrack_cli.pipeline.info import frame_count, info
-from armtrack_cli.pipeline.mocap import simulate_from_mocap
-from armtrack_cli.pipeline.report import report
-from armtrack_cli.pipeline.run import STAGES, run
-from armtrack_cli.pipeline.simulate import simulate, simulate_command
-from armtrack_cli.simulate.arm_session import ArmSimSettings
-from armtrack_cli.simulate.from_mocap import MocapSimSettings
-from armtrack_cli.simulate.palm_session import PalmSimSettings
+import importlib
+import sys
+import types
+
+# Each name is imported from its module when first used (PEP 562): a stage run in its own
+# process (a shell script, `make bench`, a Dask worker) loads what that stage needs, not every
+# stage's libraries (scipy.signal, pandas, numba, matplotlib: about 350 MB and seconds of
+# import together).
+_WHERE = {"run_many": "batch", "calibrate": "calibrate", "compare": "compare",
+          "detect": "detect", "export": "export", "fuse": "fuse", "frame_count": "info",
+          "info": "info", "simulate_from_mocap": "mocap", "report": "report", "STAGES": "run",
+          "run": "run", "simulate": "simulate", "simulate_command": "simulate"}
+_SETTINGS = {"ArmSimSettings": "armtrack_cli.simulate.arm_session",
+             "MocapSimSettings": "armtrack_cli.simulate.from_mocap",
+             "PalmSimSettings": "armtrack_cli.simulate.palm_session"}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        module = importlib.import_module(f"armtrack_cli.pipeline.{_WHERE[name]}")
+    elif name in _SETTINGS:
+        module = importlib.import_module(_SETTINGS[name])
+    else:
+        raise AttributeError(f"module 'armtrack_cli.pipeline' has no attribute {name!r}")
+    value = getattr(module, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(__all__)
+
+
+class _Package(types.ModuleType):
+    """Binding a submodule whose name is also a function's here (pipeline.fuse, the module,
+    and pipeline.fuse, the stage) binds the function: the import system sets the submodule
+    on its package when it is first imported, wherever from."""
+
+    def __setattr__(self, name, value):
+        if isinstance(value, types.ModuleType) and _WHERE.get(name) == name:
+            value = getattr(value, name)
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
 
 __all__ = ["info", "frame_count", "calibrate", "detect", "fuse", "compare", "report", "run",
            "run_many", "export",
