@@ -16,6 +16,8 @@ residual over the frames both cover. A grid at one frame period over the search 
 the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
 SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
 (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
+The drift's columns have K = DRIFT_DEGREE + 1 non-zeros per frame and axis, so the fits are
+banded least squares (fuse/drift_ls.py), linear in the session's length in time and memory.
 
 Missing detections are missing: lost runs up to BRIDGE_S are bridged for the derivative
 only, a window holding a longer loss gives no image velocity; an IMU gap longer than GAP_S
