@@ -10,7 +10,14 @@ import sys
 import numpy as np
 from scipy.interpolate import BSpline
 
-from armtrack_cli.fuse.drift_ls import Drift, SplineRows, banded_solver, fit_with_scale, normal_parts
+from armtrack_cli.fuse.drift_ls import (
+    Drift,
+    SplineRows,
+    banded_solver,
+    fit_bordered,
+    fit_with_scale,
+    normal_parts,
+)
 
 
 def _problem(n=400, seed=3):
@@ -51,6 +58,11 @@ def test_fit_with_scale_is_the_least_squares_residual():
     X = np.hstack([v.reshape(-1, 1), dense])
     theta, *_ = np.linalg.lstsq(X, y.ravel(), rcond=None)
     r = fit_with_scale(Drift(rows, J), v, y)
+    assert np.allclose(r.ravel(), y.ravel() - X @ theta, atol=1e-7)
+    E = np.random.default_rng(5).normal(0, 1, (v.shape[0], 2, 3))  # three dense columns
+    X = np.hstack([E.reshape(-1, 3), dense])
+    theta, *_ = np.linalg.lstsq(X, y.ravel(), rcond=None)
+    r = fit_bordered(Drift(rows, J), E, y)
     assert np.allclose(r.ravel(), y.ravel() - X @ theta, atol=1e-7)
 
 

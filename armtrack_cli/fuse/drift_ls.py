@@ -102,13 +102,20 @@ class Drift:
         return np.einsum("kia,ka->ki", self.J, d)
 
 
-def fit_with_scale(D: Drift, v: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Residuals (n, 2) of the least squares y ≈ c v + D θ (RIDGE on every parameter's
-    diagonal): the drift eliminated by its banded factor, then the scale c."""
+def fit_bordered(D: Drift, E: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Residuals (n, 2) of the least squares y ≈ E γ + D θ, E (n, 2, c) a few dense columns
+    (the IMU's scale; a bias's), RIDGE on every parameter's diagonal: the drift eliminated by
+    its banded factor, then the c × c system of the dense columns (its Schur complement)."""
     ab, Dy, _ = normal_parts(D.rows, D.J, y)
     solve = banded_solver(ab)
-    Dv = D.t(v)
-    Gy, Gv = solve(Dy), solve(Dv)
-    c = (float(np.sum(v * y)) - Dv @ Gy) / (float(np.sum(v * v)) + RIDGE - Dv @ Gv)
-    theta = Gy - c * Gv
-    return y - c * v - D.times(theta)
+    DE = np.stack([D.t(E[:, :, i]) for i in range(E.shape[2])], axis=1)  # (3m, c)
+    Gy, GE = solve(Dy), solve(DE)
+    Ef = E.reshape(-1, E.shape[2])
+    S = Ef.T @ Ef + RIDGE * np.eye(E.shape[2]) - DE.T @ GE
+    gamma = np.linalg.solve(S, Ef.T @ y.ravel() - DE.T @ Gy)
+    return y - np.einsum("kic,c->ki", E, gamma) - D.times(Gy - GE @ gamma)
+
+
+def fit_with_scale(D: Drift, v: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """fit_bordered with one dense column, the scale c of v (n, 2): y ≈ c v + D θ."""
+    return fit_bordered(D, v[:, :, None], y)
