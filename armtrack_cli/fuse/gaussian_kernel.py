@@ -196,7 +196,8 @@ def run(x0, P0, z, dt, dp, dv, q, cam, dist, r2, method, Wm, Wc, scale, gate, re
     """methods.run_gaussian: started at frame 0 with (x0, P0); method 0 inertial (prediction
     only), 1 EKF, 2 UKF; R = r2 I. Detections gated at Mahalanobis² ``gate`` (0: off); after
     ``reacquire`` frames in a row gated or without a detection the next is used with infl
-    (6,) added to P's diagonal (fuse/robust.py). Returns mean (n_frames, 6), cov (n_frames, 6, 6), codes (n_frames,)."""
+    (6,) added to P's diagonal (fuse/robust.py). Returns mean (n_frames, 6), cov (n_frames,
+    6, 6), codes (n_frames,)."""
     n_frames = z.shape[0]
     mean = np.empty((n_frames, 6))
     cov = np.empty((n_frames, 6, 6))
