@@ -1,16 +1,16 @@
 """The particle filters of ``methods.run_particles`` compiled with numba: the same steps, in
 the same order, drawing the same random numbers from the same generator.
 
-The generator is numpy's SFC64, drawn inline (filters/sfc64.py) from its state (4,) uint64, so
-for one seed the kernel and the numpy reference see identical draws (eps (N, 12) per frame,
-(N, 6) for the plain PF, then the resampling uniforms); they differ only by the order of
-floating-point sums (tests/test_fuse_filters.py holds them equal to 1e-12). Every work array
-is allocated once per run. ``cache=True``: the compile happens once per install and is loaded
-from ``__pycache__`` afterwards.
+The random numbers come from filters/splitmix.py's counter-based stream, state (key, counter)
+uint64 (2,), drawn many at once in SIMD; the numpy reference draws the same numbers from the
+same stream (eps (12, N) per frame, (6, N) for the plain PF, then the resampling uniforms), so
+kernel and reference differ only by the order of floating-point sums (tests/test_fuse_filters.py
+holds them equal to 1e-12). Every work array is allocated once per run. ``cache=True``: the
+compile happens once per install and is loaded from ``__pycache__`` afterwards.
 
 Shapes: particles x (N, 6) = (p, v) in W (m, m/s), held inside as its transpose xs (6, N) so
 that every pass over the particles runs along contiguous rows (SIMD); the normals likewise as
-eps (12, N), filled in the reference's draw order; z (n_frames, 2) px, NaN = no detection.
+eps (12, N), the reference's draws in its order; z (n_frames, 2) px, NaN = no detection.
 The gate, roughening and re-seeding of fuse/robust.py draw their normals after eps, in the
 reference's order too (tests/test_gating.py holds kernel and reference equal with them active).
 The resampling schemes are in fuse/pf_resample_kernel.py.
@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from armtrack_cli.filters.sfc64 import fill_normals
+from armtrack_cli.filters.splitmix import fill_normals
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
 
 __all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
@@ -213,7 +213,7 @@ def _reseed(xs, w_prior, points, sigma, prior_m, state, seed_eps, m, c, d):
         q[b] = v @ np.linalg.solve(C, v)
     p0 = 1.0 / (1.0 + np.exp(min(0.5 * (q[0] - q[1]), 700.0)))
     n0 = int(np.floor(n_seed * p0 + 0.5))
-    fill_normals(state, seed_eps.T)  # the reference's (n_seed, 3), row by row
+    fill_normals(state, seed_eps)  # the reference's (3, n_seed)
     for j in range(3):
         for i in range(n_seed):
             xs[j, i] = points[0 if i < n0 else 1, j] + sigma * seed_eps[j, i]
@@ -244,8 +244,8 @@ def _gate_code(d2, gate, run_gated, reacquire):
 @njit(cache=True, error_model="numpy")
 def _roughen(xs, sd, state, eps):
     """robust.roughen: x_ij ± sd_j for every particle (the re-acquisition's spread); eps (6, N)
-    work, filled as the reference's (N, 6)."""
-    fill_normals(state, eps.T)
+    work, filled as the reference's (6, N)."""
+    fill_normals(state, eps)
     for j in range(6):
         for i in range(xs.shape[1]):
             xs[j, i] += sd[j] * eps[j, i]
@@ -299,7 +299,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     uniform = True  # every w_i is exactly 1/N
     run_gated = 0
     for k in range(n_frames):
-        fill_normals(state, eps.T)  # the reference's eps (N, 12), row by row
+        fill_normals(state, eps)  # the reference's eps (12, N)
         seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
                                   uniform, lw, px)
         if seen:  # the χ² gate, roughening and re-seeding

@@ -1,14 +1,14 @@
 """The resampling of the compiled particle filters (fuse/pf_kernel.py): the schemes of
 filters/resampling.py drawing the same uniforms from the inline SFC64 generator
-(filters/sfc64.py), and the gather of the resampled particles (6, N)."""
+(filters/splitmix.py), and the gather of the resampled particles (6, N)."""
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from armtrack_cli.filters.sfc64 import fill_random
-from armtrack_cli.filters.sfc64 import random as uniform
+from armtrack_cli.filters.splitmix import fill_random
+from armtrack_cli.filters.splitmix import random as uniform
 
 RESAMPLING = {"residual": 0, "systematic": 1, "stratified": 2, "multinomial": 3}
 SUMS = {"reassoc"}  # sums over particles may be reordered (vectorised): round-off only
