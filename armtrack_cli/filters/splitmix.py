@@ -105,27 +105,30 @@ def _attempt(r):
 @njit(cache=True, error_model="numpy")
 def fill_normals(s, out):
     """out (C-contiguous, any shape) ← standard normals in row-major order, as
-    ``normals(s, out.shape)``: the fast path for all in SIMD, 8 at a time, counting the
-    rejected ones; then, in the blocks of 8 that have one, the rejected ones again."""
-    flat = out.reshape(out.size)
-    base, n = s[0] + (s[1] + _U1) * _G, out.size
-    nb = (n + 7) // 8
-    flags = np.empty(nb, np.int64)
-    for b in range(n // 8):
-        bad = 0
-        for i in range(8 * b, 8 * b + 8):
-            r, idx, x, ok = _attempt(_mix(base + np.uint64(i) * _G))
-            flat[i] = x
-            bad += not ok
-        flags[b] = bad
-    if n % 8:
-        flags[nb - 1] = 1  # the last, partial block: looked at one by one
-    for b in range(nb):
-        if flags[b]:
-            for i in range(8 * b, min(8 * b + 8, n)):
-                r, idx, x, ok = _attempt(_mix(base + np.uint64(i) * _G))
-                flat[i] = x if ok else _slow(r, idx, x)
+    ``normals(s, out.shape)``: the fast path for all in SIMD, marking the rejected ones; then
+    those, found 8 marks (one uint64) at a time."""
+    n = out.size
+    base = s[0] + (s[1] + _U1) * _G
+    flat, rejected = out.reshape(n), np.zeros(8 * ((n + 7) // 8), np.uint8)
+    _fast_path(base, flat, rejected)
+    marks = rejected.view(np.uint64)
+    for b in range(marks.size):
+        if marks[b]:
+            for i in range(8 * b, 8 * b + 8):
+                if rejected[i]:
+                    r, idx, x, ok = _attempt(_mix(base + np.uint64(i) * _G))
+                    flat[i] = _slow(r, idx, x)
     s[1] += np.uint64(n)
+
+
+@njit(cache=True, error_model="numpy")
+def _fast_path(base, flat, rejected):
+    """flat (n,) ← the fast path on raw draws base + iγ (a 1-D array of its own: LLVM does not
+    vectorise the loop on a reshaped view), rejected[i] = 1 where it rejects."""
+    for i in range(flat.size):
+        r, idx, x, ok = _attempt(_mix(base + np.uint64(i) * _G))
+        flat[i] = x
+        rejected[i] = not ok
 
 
 # ------------------------------------------------------------- numpy (the reference's draws)
