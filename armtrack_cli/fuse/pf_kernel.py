@@ -312,7 +312,7 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
 def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
         constrained, scheme, resample_ess, guard):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
-    (eqs. 12-14). x (N, 6) the initial particles; state (4,) the SFC64 state (advanced);
+    (eqs. 12-14). x (N, 6) the initial particles; state (2,) the splitmix stream (advanced);
     ``guard`` = (points (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess,
     reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py.
     Returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""

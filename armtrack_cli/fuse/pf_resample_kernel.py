@@ -1,5 +1,5 @@
 """The resampling of the compiled particle filters (fuse/pf_kernel.py): the schemes of
-filters/resampling.py drawing the same uniforms from the inline SFC64 generator
+filters/resampling.py drawing the same uniforms from the same splitmix stream
 (filters/splitmix.py), and the gather of the resampled particles (6, N)."""
 
 from __future__ import annotations
