@@ -154,48 +154,48 @@ def uniforms(s: np.ndarray, n: int) -> np.ndarray:
 def normals(s: np.ndarray, shape) -> np.ndarray:
     """Standard normals of ``shape`` from stream s (advanced), one main draw each."""
     r = _raw_np(s, int(np.prod(shape)))
+    x, ok, idx = _attempt_np(r)
+    bad = np.flatnonzero(~ok)  # the rejected (~1.3 %): as the kernel's _slow, all at once
+    x[bad] = _slow_np(r[bad], idx[bad], x[bad])
+    return x.reshape(shape)
+
+
+def _attempt_np(r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """_attempt on raw draws r: (±abscissa, accepted, layer)."""
     idx = (r & _MASK8).astype(np.intp)
     rs = r >> _U8
     rabs = (rs >> _U1) & _MASK52
     x = rabs.astype(np.int64).astype(float) * _WI[idx]
-    x = np.where((rs & _U1).astype(bool), -x, x)
-    for i in np.flatnonzero(rabs >= _KI[idx]):  # the rejected (~1.3 %): as the kernel's
-        x[i] = _slow_np(int(r[i]), int(idx[i]), float(x[i]))
-    return x.reshape(shape)
+    return np.where((rs & _U1).astype(bool), -x, x), rabs < _KI[idx], idx
 
 
-def _slow_np(r: int, idx: int, x: float) -> float:
-    """_slow in Python integers (mod 2⁶⁴), the same draws."""
-    m64 = 2**64 - 1
-
-    def raw(z):
-        z &= m64
-        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & m64
-        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & m64
-        return z ^ (z >> 31)
-
-    def unif(v):
-        return (v >> 11) * _TWO_M53
-
-    g, j = int(_G), 0
-    while True:
-        u1, r2 = unif(raw(r + (j + 1) * g)), raw(r + (j + 2) * g)
-        j += 2
-        if idx == 0:
-            xx = -_INV_R * np.log1p(-u1)
-            yy = -np.log1p(-unif(r2))
-            if yy + yy > xx * xx:
-                return -(_R + xx) if (r >> 8) & 1 else _R + xx
-            r2 = raw(r + (j + 1) * g)
-            j += 1
-        elif (_FI[idx - 1] - _FI[idx]) * u1 + _FI[idx] < np.exp(-0.5 * x * x):
-            return x
-        idx, rs = r2 & 0xFF, r2 >> 8
-        rabs = (rs >> 1) & 0x000FFFFFFFFFFFFF
-        x = float(rabs) * _WI[idx]
-        x, r = (-x if rs & 1 else x), r2
-        if rabs < _KI[idx]:
-            return x
+def _slow_np(r: np.ndarray, idx: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """_slow for arrays of rejected draws, a round at a time for those still pending: the
+    same draws from the same sub-streams, the same tests."""
+    out, j = np.empty(r.size), np.zeros(r.size, np.uint64)
+    todo = np.arange(r.size)
+    while todo.size:
+        rr, ii, xx, jj = r[todo], idx[todo], x[todo], j[todo]
+        u1 = (_mix_np(rr + (jj + _U1) * _G) >> _U11).astype(float) * _TWO_M53
+        r2 = _mix_np(rr + (jj + _U2) * _G)
+        jj = jj + _U2
+        tail = ii == 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xt = -_INV_R * np.log1p(-u1)
+            yt = -np.log1p(-(r2 >> _U11).astype(float) * _TWO_M53)
+        tail_ok = tail & (yt + yt > xt * xt)
+        wedge_ok = ~tail & ((_FI[ii - 1] - _FI[ii]) * u1 + _FI[ii] < np.exp(-0.5 * xx * xx))
+        xt = np.where(((rr >> _U8) & _U1).astype(bool), -(_R + xt), _R + xt)
+        done = tail_ok | wedge_ok
+        out[todo[done]] = np.where(tail_ok, xt, xx)[done]
+        retry = ~done  # a new attempt: the wedge's on r2, the tail's on a fresh draw
+        rn = np.where(tail, _mix_np(rr + (jj + _U1) * _G), r2)[retry]
+        jj = (jj + tail.astype(np.uint64))[retry]
+        xn, okn, idn = _attempt_np(rn)
+        out[todo[retry][okn]] = xn[okn]
+        todo = todo[retry][~okn]
+        r[todo], idx[todo], x[todo], j[todo] = rn[~okn], idn[~okn], xn[~okn], jj[~okn]
+    return out
 
 
 class Stream:
