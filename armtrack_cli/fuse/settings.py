@@ -45,6 +45,9 @@ class FuseSettings:
     reseed_sigma_m: float = 0.005  # spread of the re-seeded particles about an intersection
     reseed_prior_m: float = 0.05  # SD added to the predicted cloud's when it weighs the two
     #                               intersections against each other
+    imu_bias_window_s: float = 0.0  # pf-constraint: > 0 runs it on a_W less the acceleration
+    #                                 error fitted causally over this many seconds of its own
+    #                                 earlier estimates (fuse/imu_bias.py); 0: off
     smoother: str = "rts"  # offline fixed-interval smoothing of the filtered estimates; the
     #                        tao2008-* recipes set "none" to reproduce the paper's filters
     seed: int = 0
@@ -79,10 +82,12 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
         raise ConfigError(where, f"[fuse] smoother = {s.smoother!r} is not a smoother",
                           did_you_mean(s.smoother, SMOOTHERS, what="smoothers"))
     if not (s.gate_chi2 >= 0 and s.reacquire_frames >= 1 and 0 <= s.reseed_share <= 1
-            and s.reseed_ess >= 0 and s.reseed_sigma_m >= 0 and s.reseed_prior_m >= 0):
-        raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_* are out of range",
+            and s.reseed_ess >= 0 and s.reseed_sigma_m >= 0 and s.reseed_prior_m >= 0
+            and s.imu_bias_window_s >= 0):
+        raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_*, imu_bias_window_s "
+                          "are out of range",
                           "gate_chi2 ≥ 0 (0: off), reacquire_frames ≥ 1, 0 ≤ reseed_share ≤ 1, "
-                          "reseed_ess, reseed_sigma_m, reseed_prior_m ≥ 0")
+                          "reseed_ess, reseed_sigma_m, reseed_prior_m, imu_bias_window_s ≥ 0")
     for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS)):
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",
