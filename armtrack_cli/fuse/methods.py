@@ -333,8 +333,12 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
                "accel_bias_m_s2": [round(float(v), 4) for v in r.x[-1, arm_smoother.BA]],
                "orientation_error_rms_deg": round(float(np.degrees(
                    np.sqrt(np.mean(np.sum(th**2, axis=1))))), 3)}
+    if r.gyro:
+        summary["gyro_bias_deg_s"] = [round(float(v), 4) for v in
+                                      np.degrees(r.x[-1, arm_smoother.BG])]
+    summary["orientation_error_model"] = "gyro" if r.gyro else "gauss-markov"
     if s.shoulder == "drifting":
-        sh = r.x[:, arm_smoother.SH]
+        sh = r.x[:, arm_smoother.shoulder_slice(r.x.shape[1])]
         summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
         summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
             sh - arm.shoulder, axis=1).max()), 4)
