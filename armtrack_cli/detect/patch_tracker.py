@@ -212,7 +212,7 @@ class PatchTracker:
         self.out[i] = (u, v, rw, rh, ang, 1)
         self.last = (u, v, i)
         self.window = tuple(int(c) for c in window)
-        self.ref.add(seen)
+        self.ref.add(seen, i)
 
     # --- acquiring
     def _acquire(self, i: int, bgr: np.ndarray) -> None:
@@ -308,7 +308,7 @@ class PatchTracker:
             ref = float(np.median(after))
             if t.good[k] and self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
                 self.out[f] = (*r, 1)
-                self.ref.add(seen)
+                self.ref.add(seen, f)
         self.last = (t.rects[-1][0], t.rects[-1][1], t.frames[-1])
         consecutive = len(t.frames) > 1 and t.frames[-2] == t.frames[-1] - 1
         self.vel = (t.rects[-1][0] - t.rects[-2][0], t.rects[-1][1] - t.rects[-2][1]) \
