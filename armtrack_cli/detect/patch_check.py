@@ -51,13 +51,16 @@ class Look:
 
 def trend(values) -> float:
     """The next value that a run of positive ``values`` (accepted frames, oldest first)
-    predicts: each one carried forward to the next frame at the median log-step of the run
-    (clipped to ±MAX_STEP_RATIO per frame), and the median of those. A steady trend gives the
-    last value times its step; one outlier moves neither the step nor the median."""
+    predicts: the Theil–Sen line of their logarithms (the median of the pairwise slopes,
+    clipped to ±MAX_STEP_RATIO per frame; Sen 1968) carried one frame on from each value, and
+    the median of those. A steady trend gives the last value times its step; pixel jitter
+    (masses alternating by a few %) and one outlier hardly move it."""
     v = np.log(np.asarray(values, float))
     if v.size < 3:
         return float(np.exp(np.median(v)))
-    step = float(np.clip(np.median(np.diff(v)), -np.log(MAX_STEP_RATIO), np.log(MAX_STEP_RATIO)))
+    i, j = np.triu_indices(v.size, 1)
+    step = float(np.clip(np.median((v[j] - v[i]) / (j - i)), -np.log(MAX_STEP_RATIO),
+                         np.log(MAX_STEP_RATIO)))
     return float(np.exp(np.median(v + step * np.arange(v.size, 0, -1))))
 
 

@@ -38,7 +38,7 @@ _OPEN = np.ones((3, 3), np.uint8)
 class PatchSettings:
     min_area_px: int = 25  # smallest region taken as a candidate
     max_jump_px: float = 60.0  # a window moving farther in one frame is a new tracklet
-    lost_fraction: float = 0.7  # region mass below this share of its running median: lost
+    lost_fraction: float = 0.7  # region mass below this share of what its trend predicts: lost
     max_growth: float = 1.3  # … above this share: something else joined it: lost
     max_aspect: float = 3.0  # a window longer than this times its width is not the patch
     max_aspect_change: float = 1.4  # … nor one this much longer than its running median
