@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from armtrack_cli.fuse.models import ray_sphere
+
 RAY_HEADER = ["| session | camera elevation (deg) | patch in view (frames) | detect ok | ok and in "
               "view | px error of ok, 99 % (max) | cos(ray, E − S), median (10 %) | "
               "abs(E − S), 5-95 % (cm) | shoulder moves, max (cm) |",
@@ -35,14 +37,12 @@ def _camera_centre(tr) -> np.ndarray:
 
 
 def _along_ray(C, ray, u, S, L1, L2, lam_true) -> np.ndarray:
-    """Signed distance along each ray from the true wrist to the constraint's root nearer it
-    (NaN where the ray misses the sphere: |C + λ r − L2 u − S| = L1 has no real root)."""
-    a = C - L2 * u - S
-    b = np.einsum("ni,ni->n", a, ray)
-    disc = b * b - (np.einsum("ni,ni->n", a, a) - L1**2)
-    sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
-    lam = np.where(np.abs(-b - sq - lam_true) < np.abs(-b + sq - lam_true), -b - sq, -b + sq)
-    return lam - lam_true
+    """Signed distance along each ray from the true wrist to the constraint's root nearer it:
+    the wrist W = C + λ r with |W − L2 u − S| = L1 is the ray meeting the sphere about
+    S + L2 u (models.ray_sphere); NaN where the ray misses it."""
+    near, far, miss = ray_sphere(C, ray, S + L2 * u, L1)
+    lam = np.where(np.abs(near - lam_true) < np.abs(far - lam_true), near, far)
+    return np.where(miss > 0, np.nan, lam - lam_true)
 
 
 def sphere_fit(P: np.ndarray) -> tuple[np.ndarray, float]:
