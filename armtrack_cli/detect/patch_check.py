@@ -9,9 +9,9 @@ the patch only if what it holds looks like the patch did:
 - its mass (pixels of the patch's colour) is within a band around the mass its recent
   accepted frames predict, and its aspect (long over short side of CamShift's box) is within a
   factor of their running median and below an absolute limit. The mass predicted follows
-  their trend (``trend``, over the latest unbroken run of accepted frames): a real patch turning
-  from edge-on to face-on while the hand comes towards the camera grows 15 % a frame for half
-  a second (the UE-ADL reaches, docs/validation-from-mocap.md), which a running median lags by
+  their trend (``trend``, over the latest unbroken run of accepted frames): a real patch
+  turning from edge-on to face-on while the hand comes towards the camera grows up to 15 % a
+  frame (the UE-ADL reaches, docs/validation-from-mocap.md), which a running median lags by
   half its window and takes for a neighbour joining; a neighbour joining or a cover sliding
   over it is a jump against the trend, which stays outside the band;
 - it lies whole inside the image (a region cut by the edge is not all of anything).

@@ -159,7 +159,7 @@ def arm_state(rec: Recording, tau: np.ndarray) -> kinematics.ArmState:
                                c(v[:, 1]), q, omega)
 
 
-def place_camera(wrist_W: np.ndarray, normal_W: np.ndarray, s: "MocapSimSettings"):
+def place_camera(wrist_W: np.ndarray, normal_W: np.ndarray, s: MocapSimSettings):
     """A camera across the table from the subject, above it, looking down at the middle of the
     wrist's workspace (docs/recording-guide.md: "in front of and above the table, looking down
     at the workspace"), as a lab would set it up for the task: of the bearings within ±45° of
