@@ -122,6 +122,18 @@ def test_the_imu_turns_with_the_forearm_and_feels_the_wrist(mocap_session):
     assert np.linalg.norm(p - w[k1]) < 0.005
 
 
+def test_the_camera_looks_down_at_the_whole_reach(mocap_session):
+    """The camera looks down at 65° (its optical axis, from R_WC) and the recording's wrist
+    path is inside the image on every frame, with the patch facing the camera on most."""
+    out, _ = mocap_session
+    tr = np.load(out.parent / "sess.truth.npz")
+    axis_W = tr["R_WC"][2]  # the optical axis (camera z) in W
+    assert np.degrees(np.arcsin(-axis_W[2])) == pytest.approx(65.0, abs=0.5)
+    px = tr["frame_wrist_px"]
+    assert ((px > 0) & (px < [640, 480])).all()
+    assert tr["frame_patch_visible"].mean() > 0.9
+
+
 def test_bad_recordings_are_one_line_errors(tmp_path):
     bad = tmp_path / "x.csv"
     bad.write_text("Trajectories\n100\n,,A:RSHO1,,\nFrame,Sub Frame,X,Y,Z\n,,mm,mm,mm\n1,0,1,2,3\n")

@@ -147,3 +147,39 @@ def test_leaving_the_image_fast():
     assert not ok[truth[:, 0] > W + SIDE / 2].any()
     assert ok[truth[:, 0] < W - SIDE].sum() >= 25
     assert err(d, truth)[ok].max() < 0.5
+
+
+def test_trend_carries_a_steady_growth_and_ignores_one_outlier():
+    """``trend`` of a geometric run is its next term; one outlier moves it by nothing."""
+    from armtrack_cli.detect.patch_check import trend
+    run = 100.0 * 1.15 ** np.arange(8)
+    assert trend(run) == pytest.approx(100.0 * 1.15**8, rel=1e-9)
+    bad = run.copy()
+    bad[4] *= 0.6  # one frame half covered
+    assert trend(bad) == pytest.approx(100.0 * 1.15**8, rel=1e-9)
+    assert trend([50.0, 50.0, 50.0, 50.0]) == pytest.approx(50.0)
+
+
+def test_a_patch_turning_face_on_is_followed():
+    """The patch grows 11 % in area a frame for 16 frames while it moves (a hand turning its
+    back to the camera as it comes nearer: the UE-ADL reaches do this). Every frame is the patch
+    and is reported, on it; a running median of the last 8 masses (the check before) would
+    have taken the growth for a neighbour joining (mass > 1.3 × that median)."""
+    rng = np.random.default_rng(7)
+    n = 40
+    side = np.r_[np.full(10, 12.0), 12.0 * (28 / 12) ** (np.arange(1, 17) / 16), np.full(14, 28.0)]
+    centre = np.stack([100 + 3.0 * np.arange(n), 120 + 0.5 * np.arange(n)], -1)
+    frames = []
+    for i in range(n):
+        img = np.full((H, W, 3), 150, np.uint8)
+        u, v, h = centre[i, 0], centre[i, 1], side[i] / 2
+        pts = np.array([[u - h, v - h], [u + h, v - h], [u + h, v + h], [u - h, v + h]])
+        cv2.fillConvexPoly(img, np.round(pts * 16).astype(np.int32), PATCH, cv2.LINE_AA, 4)
+        img = cv2.GaussianBlur(img, (3, 3), 0.6).astype(np.float32)
+        frames.append(np.clip(img + rng.normal(0, 2.0, img.shape), 0, 255).astype(np.uint8))
+    d = track(frames)
+    assert (d[:, 5] == 1).all()
+    assert err(d, centre).max() < 0.5
+    area = side**2
+    old = [area[k] / np.median(area[k - 8:k]) for k in range(8, n)]
+    assert max(old) > 1.3  # the old rule's band is exceeded: this test tells them apart

@@ -38,7 +38,7 @@ _OPEN = np.ones((3, 3), np.uint8)
 class PatchSettings:
     min_area_px: int = 25  # smallest region taken as a candidate
     max_jump_px: float = 60.0  # a window moving farther in one frame is a new tracklet
-    lost_fraction: float = 0.7  # region mass below this share of its running median: lost
+    lost_fraction: float = 0.7  # region mass below this share of what its trend predicts: lost
     max_growth: float = 1.3  # … above this share: something else joined it: lost
     max_aspect: float = 3.0  # a window longer than this times its width is not the patch
     max_aspect_change: float = 1.4  # … nor one this much longer than its running median
@@ -212,7 +212,7 @@ class PatchTracker:
         self.out[i] = (u, v, rw, rh, ang, 1)
         self.last = (u, v, i)
         self.window = tuple(int(c) for c in window)
-        self.ref.add(seen)
+        self.ref.add(seen, i)
 
     # --- acquiring
     def _acquire(self, i: int, bgr: np.ndarray) -> None:
@@ -308,7 +308,7 @@ class PatchTracker:
             ref = float(np.median(after))
             if t.good[k] and self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
                 self.out[f] = (*r, 1)
-                self.ref.add(seen)
+                self.ref.add(seen, f)
         self.last = (t.rects[-1][0], t.rects[-1][1], t.frames[-1])
         consecutive = len(t.frames) > 1 and t.frames[-2] == t.frames[-1] - 1
         self.vel = (t.rects[-1][0] - t.rects[-2][0], t.rects[-1][1] - t.rects[-2][1]) \
