@@ -13,11 +13,20 @@ from armtrack_cli.fuse import arm_auto, models
 from armtrack_cli.session.arm_file import read_arm_estimate
 from armtrack_cli.session.config import Session
 
+ANCHORED_WALK = 0.001  # rad/√s: the gyro-anchored orientation's error is nearly constant (its
+#                        white-noise walk: ~0.1° over 20 s; docs/validation-from-mocap.md)
+
 
 def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
-    """The free parts of the arm from the most varied stretch of the filtered frames."""
-    inp, st = prepared.inputs, arm_auto.AutoSettings()
-    f_W = models.quat.rotate(inp.q_WB, session.imu.forearm_unit)
+    """The free parts of the arm from the most varied stretch of the filtered frames, with the
+    IMU's orientation whose wandering error the gyro has replaced by a constant one
+    (fuse/gyro_orientation.py; the batch estimates that constant)."""
+    inp, st = prepared.inputs, arm_auto.AutoSettings(orientation_walk=ANCHORED_WALK)
+    t_fr = prepared.t_frames[prepared.frames]
+    q_WB = models.quat.interpolate(inp.imu.t, prepared.q_anchored, t_fr)
+    steps = models.composite_steps(inp.imu.t, models.accel_world(prepared.q_anchored, inp.imu.f_B),
+                                   t_fr, accel_noise=0.0, imu_period=1.0)
+    f_W = models.quat.rotate(q_WB, session.imu.forearm_unit)
     w = arm_auto.varied_stretch(inp.z[::st.stride], f_W[::st.stride], st.max_frames)
     a, b = w.start * st.stride, min(inp.z.shape[0], w.stop * st.stride)
     idx = np.arange(a, b, st.stride)
@@ -29,8 +38,8 @@ def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
     declared = {k: (None if k in arm.auto else v) for k, v in
                 (("shoulder_m", arm.shoulder_m), ("upper_arm_m", arm.upper_arm_m),
                  ("forearm_m", arm.forearm_m))}
-    return arm_auto.estimate_arm(arm_auto.coarsen(inp.steps, st.stride, a, b), inp.z[idx],
-                                 inp.q_WB[idx], prepared.t_frames[prepared.frames[idx]],
+    return arm_auto.estimate_arm(arm_auto.coarsen(steps, st.stride, a, b), inp.z[idx],
+                                 q_WB[idx], prepared.t_frames[prepared.frames[idx]],
                                  prepared.projection, session.imu.forearm_unit, declared, st)
 
 
