@@ -83,3 +83,43 @@ def test_start_picks_the_intersection_near_the_table():
         roots = [PROJ.eye + (-b + sg * np.sqrt(b * b - (oc @ oc - arm.L1**2))) * d for sg in (-1, 1)]
         other = max(roots, key=lambda r: np.linalg.norm(r - s.wrist[0]))
         assert 0.05 < np.linalg.norm(other - s.wrist[0]) < 0.6  # a real, distant ambiguity
+
+
+def test_ray_sphere_closed_forms():
+    """models.ray_sphere against geometry done by hand: a ray through the centre meets the
+    sphere at |o − c| ∓ r; a tangent ray touches it once (near = far = the foot of the
+    perpendicular, miss 0); a ray passing at distance h > r misses it by h − r, near = far =
+    the ray's nearest point; one call handles all three at once (vectorised over rays)."""
+    o = np.array([0.1, -0.2, 0.9])
+    c = np.array([0.4, 0.2, 0.0])
+    r = 0.3
+    L = float(np.linalg.norm(c - o))
+    u = (c - o) / L
+    perp = np.cross(u, [0.0, 0.0, 1.0])
+    perp /= np.linalg.norm(perp)
+    # the tangent ray from o touches the sphere at angle asin(r / L) off the axis
+    a = np.arcsin(r / L)
+    tangent = np.cos(a) * u + np.sin(a) * perp
+    h = 0.5  # a ray whose line passes h from the centre: the axis tilted by asin(h / L)
+    b = np.arcsin(h / L)
+    missing = np.cos(b) * u - np.sin(b) * perp
+    d = np.stack([u, tangent, missing])
+    near, far, miss = models.ray_sphere(o, d, np.tile(c, (3, 1)), r)
+    np.testing.assert_allclose([near[0], far[0], miss[0]], [L - r, L + r, 0.0], atol=1e-12)
+    t = np.sqrt(L**2 - r**2)  # tangent length
+    np.testing.assert_allclose([near[1], far[1], miss[1]], [t, t, 0.0], atol=1e-6)
+    foot = L * np.cos(b)
+    np.testing.assert_allclose([near[2], far[2], miss[2]], [foot, foot, h - r], atol=1e-12)
+    # one ray against several spheres, and the scalar case, broadcast alike
+    n1, f1, m1 = models.ray_sphere(o, u, c, r)
+    assert np.shape(n1) == () and abs(n1 - (L - r)) < 1e-12 and m1 == 0.0
+
+
+def test_rays_pass_through_their_pixels():
+    """Projection.rays: a point at any depth along the ray of pixel z projects back to z."""
+    uv = np.array([[100.0, 80.0], [320.0, 240.0], [600.0, 420.0]])
+    d = PROJ.rays(uv)
+    np.testing.assert_allclose(np.linalg.norm(d, axis=1), 1.0, atol=1e-12)
+    for depth in (0.3, 1.0):
+        np.testing.assert_allclose(PROJ(PROJ.eye + depth * d), uv, atol=1e-6)
+    np.testing.assert_allclose(PROJ.ray(uv[1]), d[1], atol=1e-15)

@@ -30,7 +30,7 @@ from scipy import sparse
 from scipy.sparse.linalg import splu
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse.models import GRAVITY_W, Projection, Steps
+from armtrack_cli.fuse.models import GRAVITY_W, Projection, Steps, ray_sphere
 
 PARAMS = ("shoulder_x", "shoulder_y", "shoulder_z", "upper_arm_m", "forearm_m")
 # Adult segment lengths (shoulder-elbow, elbow-wrist centre): mean ± a wide SD, only to keep
@@ -236,13 +236,10 @@ def _initial(steps: Steps, uv, f_W, proj: Projection, theta: np.ndarray, free) -
     n = uv.shape[0]
     idx = np.flatnonzero(np.isfinite(uv).all(1))
     uv_f = np.array([np.interp(np.arange(n), idx, uv[idx, j]) for j in range(2)]).T
-    rays = np.array([proj.ray(z) for z in uv_f])
-    oc = proj.eye - (theta[:3] + theta[4] * f_W)
-    bq = np.sum(rays * oc, 1)
-    disc = bq * bq - (np.sum(oc * oc, 1) - theta[3] ** 2)
-    near, far = -bq - np.sqrt(np.maximum(disc, 0)), -bq + np.sqrt(np.maximum(disc, 0))
+    rays = proj.rays(uv_f)
+    near, far, miss = ray_sphere(proj.eye, rays, theta[:3] + theta[4] * f_W, theta[3])
     lo = proj.eye[2] + near * rays[:, 2] < proj.eye[2] + far * rays[:, 2]
-    depth = np.where(disc < 0, -bq, np.where(lo, near, far))
+    depth = np.where(miss > 0, near, np.where(lo, near, far))  # missed: near = far
     p = proj.eye + depth[:, None] * rays
     v = np.gradient(p, np.cumsum(steps.dt), axis=0)
     return np.r_[np.hstack([p, v, np.zeros((n, 3))]).ravel(), np.zeros(3), theta[free]]

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
@@ -141,18 +140,12 @@ def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
     x0, _ = models.initial_wrist(p.proj, p.uv[det[0]], arm=p.arm, q_WB=q[0],
                                  plane_height_m=0.07)
     c = p.proj.eye
-    n = cv2.undistortPoints(p.uv[det].reshape(-1, 1, 2), p.proj.K, p.proj.cam.dist).reshape(-1, 2)
-    d = np.hstack([n, np.ones((n.shape[0], 1))]) @ p.proj.R  # R_WCᵀ (x, y, 1): rays in W
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d = p.proj.rays(p.uv[det])
     out = np.full((p.uv.shape[0], 3), np.nan)
     if p.arm is None:
         out[det] = c + np.linalg.norm(x0 - c) * d
         return out
-    oc = c - p.arm.sphere_centres(q)
-    bq = np.einsum("ij,ij->i", d, oc)
-    disc = bq * bq - (np.einsum("ij,ij->i", oc, oc) - p.arm.L1**2)
-    root = np.sqrt(np.maximum(disc, 0.0))
-    near, far = -bq - root, -bq + root
+    near, far, _ = models.ray_sphere(c, d, p.arm.sphere_centres(q), p.arm.L1)
     prev = np.linalg.norm(x0 - c)
     for i in range(det.size):
         s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]

@@ -155,10 +155,32 @@ class Projection:
 
     def ray(self, uv: np.ndarray) -> np.ndarray:
         """Unit direction in W of the ray through an observed pixel."""
-        n = cv2.undistortPoints(np.asarray(uv, float).reshape(1, 1, 2), self.K,
-                                self.cam.dist).reshape(2)
-        d = self.R.T @ np.r_[n, 1.0]
-        return d / np.linalg.norm(d)
+        return self.rays(np.asarray(uv, float).reshape(1, 2))[0]
+
+    def rays(self, uv: np.ndarray) -> np.ndarray:
+        """(n, 3) unit directions in W of the rays through pixels uv (n, 2)."""
+        n = cv2.undistortPoints(np.asarray(uv, float).reshape(-1, 1, 2), self.K,
+                                self.cam.dist).reshape(-1, 2)
+        d = np.c_[n, np.ones(len(n))] @ self.R  # R_WCᵀ (x, y, 1)
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def ray_sphere(origin: np.ndarray, d: np.ndarray, centre: np.ndarray,
+               radius: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where rays origin + s·d (d (..., 3) unit) meet spheres |p − centre| = radius (eq. 15's
+    sphere about S + L2·R u, radius L1), broadcast over the leading axes.
+
+    Returns (near, far, miss), each (...,): the two depths s = −b ∓ √(b² − |o − c|² + r²),
+    b = d·(o − c), near ≤ far (negative = behind the origin); where the ray misses the sphere
+    (discriminant < 0) both are −b, the ray's point nearest to it, and miss is how far (m) the
+    ray passes outside the sphere, √(|o − c|² − b²) − r (0 where it meets it)."""
+    oc = np.asarray(origin, float) - centre
+    b = np.sum(d * oc, axis=-1)
+    oc2 = np.sum(oc * oc, axis=-1)
+    disc = b * b - (oc2 - np.square(radius))
+    root = np.sqrt(np.maximum(disc, 0.0))
+    miss = np.maximum(np.sqrt(np.maximum(oc2 - b * b, 0.0)) - radius, 0.0)
+    return -b - root, -b + root, np.where(disc < 0, miss, 0.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -192,13 +214,10 @@ def initial_wrist(proj: Projection, uv: np.ndarray, *, arm: Arm | None, q_WB: np
     if arm is None:
         s = (plane_height_m - c[2]) / d[2]
         return c + s * d, f"ray and the plane z = {plane_height_m:.3f} m"
-    centre = arm.shoulder + arm.L2 * quat.rotate(q_WB, arm.forearm_B)
-    oc = c - centre
-    bq, cq = d @ oc, oc @ oc - arm.L1**2
-    disc = bq * bq - cq
-    if disc < 0:  # the ray misses the sphere: the ray's point nearest to it
-        return c - bq * d, "nearest point of the ray to the arm sphere (no intersection)"
-    cands = [c + s * d for s in (-bq - np.sqrt(disc), -bq + np.sqrt(disc)) if s > 0]
+    near, far, miss = ray_sphere(c, d, arm.sphere_centres(q_WB[None])[0], arm.L1)
+    if miss > 0:  # the ray misses the sphere: the ray's point nearest to it
+        return c + near * d, "nearest point of the ray to the arm sphere (no intersection)"
+    cands = [c + s * d for s in (near, far) if s > 0]
     above = [p for p in cands if p[2] >= -0.01] or cands
     return min(above, key=lambda p: p[2]), "ray and the arm sphere, the point nearest the table"
 
@@ -206,6 +225,5 @@ def initial_wrist(proj: Projection, uv: np.ndarray, *, arm: Arm | None, q_WB: np
 def ray_misses_arm(proj: Projection, uv: np.ndarray, arm: Arm, q_WB: np.ndarray) -> float:
     """How far (m) the camera ray of pixel uv passes outside the sphere of radius L1 about
     S + L2·R u on which the wrist must lie (Tao & Hu eq. 15); 0 when it meets it."""
-    c, d = proj.eye, proj.ray(uv)
-    oc = c - (arm.shoulder + arm.L2 * quat.rotate(q_WB, arm.forearm_B))
-    return max(0.0, float(np.linalg.norm(oc - (oc @ d) * d)) - arm.L1)
+    return float(ray_sphere(proj.eye, proj.ray(uv), arm.sphere_centres(q_WB[None])[0],
+                            arm.L1)[2])

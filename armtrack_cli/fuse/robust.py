@@ -30,8 +30,9 @@ between branches it cannot tell apart.
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
+
+from armtrack_cli.fuse import models
 
 NONE, USED, GATED, REACQUIRED, RESEEDED = 0, 1, 2, 3, 4  # per-frame detection codes
 CODE_NAMES = {USED: "used", GATED: "gated", REACQUIRED: "reacquired", RESEEDED: "reseeded"}
@@ -69,15 +70,9 @@ def ray_sphere_points(proj, arm, z: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
     seen = np.isfinite(z).all(axis=1)
     if not seen.any():
         return out
-    norm = cv2.undistortPoints(z[seen].reshape(-1, 1, 2).astype(float), proj.K,
-                               proj.cam.dist).reshape(-1, 2)
-    d = np.c_[norm, np.ones(len(norm))] @ proj.R  # R_WCᵀ (x, y, 1): the ray in W
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    oc = proj.eye - arm.sphere_centres(q_WB[seen])
-    b = np.einsum("ij,ij->i", d, oc)
-    disc = b * b - (np.einsum("ij,ij->i", oc, oc) - arm.L1**2)
-    root = np.sqrt(np.maximum(disc, 0.0))
-    s = np.maximum(np.stack([-b - root, -b + root], 1), 0.0)  # never behind the camera
+    d = proj.rays(z[seen])
+    near, far, _ = models.ray_sphere(proj.eye, d, arm.sphere_centres(q_WB[seen]), arm.L1)
+    s = np.maximum(np.stack([near, far], 1), 0.0)  # never behind the camera
     out[seen] = proj.eye + s[:, :, None] * d[:, None, :]
     return out
 
