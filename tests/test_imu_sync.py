@@ -84,3 +84,31 @@ def test_declared_offset_wrong_by_0_2_s_warns(session):
     warn = [str(w.message) for w in seen if "clock offset" in str(w.message)]
     assert len(warn) == 1 and "\n" not in warn[0], warn
     assert re.search(r"at -0\.\d{3} ± 0\.\d{3} s, not the declared \+0\.000 s", warn[0]), warn
+
+
+@pytest.mark.parametrize("offset_s,seed", [(0.5, 0), (-0.2, 1)])
+def test_slow_circle_within_10_ms(offset_s, seed):
+    """A circle's lap (~6 s) lies where the reported orientation's wandering gravity leak
+    does; with the gyro-anchored orientation (fuse/gyro_orientation.py) the estimate is
+    within issue 14's 10 ms (it was 25 ms off with the reported orientation,
+    docs/validation-sync.md)."""
+    off = estimate_imu_offset(case(offset_s, task="circle", seed=seed))
+    assert abs(off.estimate_s - offset_s) <= 0.010
+    assert abs(off.estimate_s - offset_s) <= 3 * off.sd_s
+
+
+def test_rays_meet_the_true_sheet_where_they_graze():
+    """On a 60 s circle the camera ray grazes the arm's sphere for hundreds of frames; the
+    depths (imu_sync.wrist_on_rays) stay on the wrist's sheet at offsets a few ms either side
+    of the truth (a choice by nearness alone bounced onto the other for seconds at +12.7 ms)."""
+    from armtrack_cli.fuse.imu_sync import wrist_on_rays
+    from armtrack_cli.simulate import kinematics
+
+    p = case(0.05, task="circle", seed=0, duration=60.0)
+    s = ArmSimSettings(task="circle", duration_s=60.0)
+    arm = kinematics.ArmGeometry(np.array(s.shoulder), s.upper_arm_m, s.forearm_m)
+    true = kinematics.arm_state(arm, kinematics.Task("circle", 60.0, np.array(s.centre),
+                                                     s.size_m), p.t_frames).wrist
+    for delta in (0.04, 0.05, 0.0627):
+        err = np.linalg.norm(wrist_on_rays(p, delta) - true, axis=1)
+        assert np.mean(err > 0.05) < 0.005, delta

@@ -95,9 +95,9 @@ def auto_arm(folder: Path, s: ArmSimSettings) -> dict:
     return row
 
 
-def run_sessions(tmp: Path, duration: float) -> list[dict]:
+def run_sessions(tmp: Path, duration: float, cases=CASES) -> list[dict]:
     rows = []
-    for task, off, seed in CASES:
+    for task, off, seed in cases:
         folder = tmp / f"{task}-{seed}"
         s = ArmSimSettings(task=task, seed=seed, duration_s=duration, imu_offset_s=off,
                            declare_imu_offset=False)
@@ -110,3 +110,37 @@ def run_sessions(tmp: Path, duration: float) -> list[dict]:
         rows.append(row)
         print(row, flush=True)
     return rows
+
+
+def markdown(rows: list[dict]) -> list[str]:
+    """Sections C and D of docs/validation-sync.md from run_sessions' rows."""
+    errs = np.array([t["err_ms"] for r in rows for t in r["truth"]])
+    sds = np.array([t["sd_ms"] for r in rows for t in r["truth"]])
+    lines = ["## C. `groundtruth_offset_s = \"auto\"`: the Qualisys clock from the trajectory",
+             "", "Each session of B (its IMU offset \"auto\") with its Qualisys export re-made "
+             "by the simulator at each true offset; compare estimates it against the default "
+             "method's trajectory (compare/sync.py). Goal: within 5 ms.", "",
+             "| session | " + " | ".join(f"{o:+.2f} s" for o in OFFSETS) + " |",
+             "|---|" + "---|" * len(OFFSETS)]
+    for r in rows:
+        lines.append(f"| {r['task']} seed {r['seed']} | " + " | ".join(
+            f"{t['err_ms']:+.1f} ± {t['sd_ms']:.1f} ms" for t in r["truth"]) + " |")
+    lines += ["", f"Error ± SD per true offset. Within 5 ms: **{np.mean(np.abs(errs) <= 5) * 100:.0f} %** "
+              f"of {errs.size}; max {np.abs(errs).max():.1f} ms; within 3 SD: "
+              f"{np.mean(np.abs(errs) <= 3 * sds) * 100:.0f} %.", "",
+              "## D. `[arm] … = \"auto\"` with the IMU offset \"auto\"", "",
+              "The same sessions with shoulder, upper arm and forearm all \"auto\", the IMU "
+              "offset declared (true) and \"auto\"; wrist / elbow 3-D RMSE by compare beside "
+              "the fully declared session's (B).", "",
+              "| session | declared arm and δ | auto arm, δ declared | auto arm, δ auto: δ ± SD s "
+              "| … wrist / elbow RMSE cm | auto arm's errors: shoulder, L1, L2 cm |",
+              "|---|---|---|---|---|---|"]
+    for r in rows:
+        de, a1, a2 = r["declared_rmse"], r["arm_auto"], r["both_auto"]
+        lines.append(
+            f"| {r['task']} seed {r['seed']} | {de[0]:.2f} / {de[1]:.2f} | "
+            f"{a1['rmse'][0]:.2f} / {a1['rmse'][1]:.2f} | {a2['offset']['value']:+.4f} ± "
+            f"{a2['offset']['sd']:.4f} (true {r['offset']:+.2f}) | {a2['rmse'][0]:.2f} / "
+            f"{a2['rmse'][1]:.2f} | {a2['shoulder_cm']:.1f}, {a2['L1_cm']:+.1f}, "
+            f"{a2['L2_cm']:+.1f} |")
+    return lines + [""]

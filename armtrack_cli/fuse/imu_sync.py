@@ -45,6 +45,8 @@ BRIDGE_S = 0.1  # detections lost for at most this long are bridged for the deri
 MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be scored
 MIN_FRAMES = 30
 REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
+GRAZE_M = 0.15  # m: intersections closer than this along the ray are a grazing ray's (with 0.5 px
+#                of noise a grazing ray's two part by 10 cm from one frame to the next)
 REPREPARE = 3  # at most this many refinements, each with the depths and bias columns at its δ
 
 
@@ -130,7 +132,10 @@ def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
 def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
     """(n, 3) m: each detection's ray where it meets the arm's sphere |p − (S + L2 R u)| = L1
     (eq. 15; the IMU's orientation at t − δ), the intersection nearer the previous frame's
-    (the first: models.initial_wrist's), the ray's nearest point where it misses; without an
+    (the first: models.initial_wrist's), where the two are within GRAZE_M of each other the
+    one nearer the table as models.initial_wrist takes it (a grazing ray's choice by nearness
+    bounced onto the other sheet for seconds from a sub-frame change of δ), the ray's nearest
+    point where it misses; without an
     arm, at the range of the first detection's start. NaN without a detection."""
     from armtrack_cli.core import quaternion as quat
 
@@ -146,9 +151,13 @@ def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
         out[det] = c + np.linalg.norm(x0 - c) * d
         return out
     near, far, _ = models.ray_sphere(c, d, p.arm.sphere_centres(q), p.arm.L1)
+    lower = np.where(near * d[:, 2] <= far * d[:, 2], near, far)  # nearer the table
     prev = np.linalg.norm(x0 - c)
     for i in range(det.size):
-        s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]
+        if far[i] - near[i] < GRAZE_M:  # a grazing ray: which one is ambiguous; the table's
+            s = lower[i]
+        else:
+            s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]
         out[det[i]] = c + s * d[i]
         prev = s
     return out
@@ -297,17 +306,23 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
     if not np.isfinite(costs).any():
         return None
     delta = float(grid[int(np.argmin(costs))])
-    for _ in range(REPREPARE):  # the rays' depths and the bias's columns at the latest δ
-        pre = _prepare(p, delta)
-        moved, delta = delta, _refine(p, pre, n_img, delta, step)
-        if abs(delta - moved) < 1e-3:
+    tried = [_refine(p, pre, n_img, delta, step) + (pre,)]
+    for _ in range(REPREPARE):  # the rays' depths with the IMU's orientation at the latest δ
+        pre = _prepare(p, tried[-1][0])
+        tried.append(_refine(p, pre, n_img, tried[-1][0], step) + (pre,))
+        if abs(tried[-1][0] - tried[-2][0]) < 1e-3:
             break
+    # where a ray grazes the sphere the depths' chain can take the other intersection from a
+    # slightly different orientation: the preparation that explains the data best is kept
+    delta, _, pre = min(tried, key=lambda x: x[1])
     sd, frames = _sd(p, pre, delta)
     return ImuOffset(delta, sd, frames)
 
 
-def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float) -> float:
-    """The cost's minimum within d0 ± REFINE_FRAMES periods, on the frames all of it scores."""
+def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
+            ) -> tuple[float, float]:
+    """The cost's minimum within d0 ± REFINE_FRAMES periods, on the frames all of it scores:
+    (δ, cost)."""
     from scipy.optimize import minimize_scalar
 
     lo, hi = d0 - REFINE_FRAMES * step, d0 + REFINE_FRAMES * step
@@ -316,7 +331,7 @@ def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float) 
     c0 = cost(d0, p, pre, n_img, cache, frames)
     res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
                           args=(p, pre, n_img, cache, frames), options={"xatol": 1e-5})
-    return float(res.x) if res.fun <= c0 else d0
+    return (float(res.x), float(res.fun)) if res.fun <= c0 else (d0, c0)
 
 
 def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
