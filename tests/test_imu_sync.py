@@ -86,6 +86,39 @@ def test_declared_offset_wrong_by_0_2_s_warns(session):
     assert re.search(r"at -0\.\d{3} ± 0\.\d{3} s, not the declared \+0\.000 s", warn[0]), warn
 
 
+def _auto_arm_copy(session: Path, dest: Path, imu_offset: str) -> Path:
+    """The session with [arm] all "auto" and the given imu_offset_s (files linked, calibrate's
+    and detect's outputs copied)."""
+    import shutil
+
+    dest.mkdir()
+    for f in session.iterdir():
+        if f.is_file() and f.name != "session.toml":
+            (dest / f.name).symlink_to(f)
+    shutil.copytree(session / "armtrack", dest / "armtrack")
+    text = re.sub(r"^imu_offset_s = .*$", f"imu_offset_s = {imu_offset}",
+                  (session / "session.toml").read_text(), flags=re.M)
+    for key in ("upper_arm_m", "forearm_m", "shoulder_m"):
+        text = re.sub(rf"^{key} = .*$", f'{key} = "auto"', text, flags=re.M)
+    (dest / "session.toml").write_text(text)
+    return dest
+
+
+def test_auto_offset_and_auto_arm_together(session, tmp_path):
+    """With the arm "auto" the offset is set again with the estimated arm's depths: "auto" is
+    found (true -0.2 s), and a declared offset 0.2 s off is checked and warned about."""
+    auto = _auto_arm_copy(session, tmp_path / "auto", '"auto"')
+    got = pipeline.fuse(auto)
+    off = got["imu_offset_s"]
+    assert off["from"] == "auto" and abs(off["value"] + 0.2) <= max(3 * off["sd"], 0.01), off
+    wrong = _auto_arm_copy(session, tmp_path / "wrong", "0")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        got = pipeline.fuse(wrong)
+    assert "unchecked" not in got["imu_offset_s"]
+    assert any("not the declared +0.000 s" in str(w.message) for w in seen)
+
+
 @pytest.mark.parametrize("offset_s,seed", [(0.5, 0), (-0.2, 1)])
 def test_slow_circle_within_10_ms(offset_s, seed):
     """A circle's lap (~6 s) lies where the reported orientation's wandering gravity leak

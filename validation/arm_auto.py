@@ -57,6 +57,27 @@ def _auto_copy(folder: Path) -> Path:
     return dest
 
 
+def with_true_orientation(auto: Path, truth: Path, s: ArmSimSettings) -> np.ndarray:
+    """The batch alone (pipeline/arm_model.estimate) on the same session with the IMU's true
+    orientation in place of the gyro-anchored one: its shoulder error (cm), the part of the
+    error the remaining constant orientation error is responsible for."""
+    import dataclasses
+    import importlib
+
+    from armtrack_cli.pipeline import arm_model
+    from armtrack_cli.session.config import load_session
+    from armtrack_cli.session.imu import read_imu
+
+    fuse_mod = importlib.import_module("armtrack_cli.pipeline.fuse")
+    sess = load_session(auto)
+    p = fuse_mod.prepare(sess, auto / "armtrack", fuse_mod.settings_for(None, (), kind=sess.kind)[0])
+    imu = read_imu(sess.imu.file)
+    ok = np.isfinite(imu.acc).all(1) & np.isfinite(imu.quat).all(1)
+    q_true = np.load(truth)["imu_q_true"][ok]
+    est = arm_model.estimate(sess, dataclasses.replace(p, q_anchored=q_true))
+    return (est.shoulder - np.array(s.shoulder)) * 100
+
+
 def session_row(folder: Path, s: ArmSimSettings) -> dict:
     """Declared and auto arm on one simulated session: wrist RMSE per method, and the auto
     estimate's errors against the true arm with its SDs (cm)."""
@@ -72,6 +93,8 @@ def session_row(folder: Path, s: ArmSimSettings) -> dict:
     row["d_L1"] = (est["upper_arm_m"] - s.upper_arm_m) * 100
     row["d_L2"] = (est["forearm_m"] - s.forearm_m) * 100
     row["sd"] = np.r_[est["shoulder_sd_m"], est["upper_arm_sd_m"], est["forearm_sd_m"]] * 100
+    row["d_shoulder_true_q"] = with_true_orientation(auto, folder.parent / f"{folder.name}.truth.npz",
+                                                     s)
     m = METHODS[0]
     row["met"] = bool(np.linalg.norm(row["d_shoulder"]) <= GOALS["shoulder_cm"]
                       and max(abs(row["d_L1"]), abs(row["d_L2"])) <= GOALS["length_cm"]
@@ -81,19 +104,20 @@ def session_row(folder: Path, s: ArmSimSettings) -> dict:
 
 def line(name: str, r: dict) -> str:
     if "error" in r:
-        return f"| {name} | not computable: {r['error']} |||||||||"
+        return f"| {name} | not computable: {r['error']} ||||||||||"
     sh = ", ".join(f"{v:+.1f}" for v in r["d_shoulder"])
     sd = ", ".join(f"{v:.1f}" for v in r["sd"][:3])
     cells = " | ".join(f"{r['declared'][m]:.2f} | {r['auto'][m]:.2f}" for m in METHODS)
     return (f"| {name} | {cells} | {sh} ({sd}) | {np.linalg.norm(r['d_shoulder']):.1f} | "
             f"{r['d_L1']:+.1f} ({r['sd'][3]:.1f}) | {r['d_L2']:+.1f} ({r['sd'][4]:.1f}) | "
-            f"{'yes' if r['met'] else 'no'} |")
+            f"{'yes' if r['met'] else 'no'} | {np.linalg.norm(r['d_shoulder_true_q']):.1f} |")
 
 
 HEADER = ["| session | arm-smoother wrist RMSE, declared arm (cm) | … auto arm | pf-constraint, "
           "declared | … auto | shoulder error x, y, z (SD) cm | shoulder error, 3-D cm | "
-          "L1 error (SD) cm | L2 error (SD) cm | all goals |",
-          "|---|---|---|---|---|---|---|---|---|---|"]
+          "L1 error (SD) cm | L2 error (SD) cm | all goals | shoulder error, 3-D cm, the batch "
+          "with the true orientation |",
+          "|---|---|---|---|---|---|---|---|---|---|---|"]
 
 
 def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> None:
@@ -116,8 +140,27 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> N
         f"max {max(sh, default=np.nan):.1f} cm; both lengths within 1 cm on "
         f"{sum(v <= 1 for v in ln)}, max {max(ln, default=np.nan):.1f} cm; wrist RMSE auto / "
         f"declared (arm-smoother) ≤ 1.2 on {sum(v <= 1.2 for v in ratio)}, max "
-        f"{max(ratio, default=np.nan):.2f}; all goals on {sum(r['met'] for r in ok)}.", ""]
+        f"{max(ratio, default=np.nan):.2f}; all goals on {sum(r['met'] for r in ok)}.", "",
+        READING, ""]
     out.write_text("\n".join(lines))
+
+
+READING = (
+    "Reading. The batch sees the elbow only through the wrist and the IMU's forearm axis "
+    "(eq. 2), and over a table-top task the elbow covers a small cap of its sphere, whose "
+    "centre moves along the cap's normal by about ten times any systematic error in the "
+    "elbow: a 0.3° tilt of the forearm axis (L2 · 0.006 = 1.5 mm at the elbow) moves the "
+    "shoulder by 1-2 cm. The gyro-anchored orientation (fuse/gyro_orientation.py) leaves one "
+    "constant error of that size (the reported error's mean over the session), and the batch "
+    "cannot tell its tilt from the accelerometer's bias (both a nearly constant acceleration "
+    "while the forearm turns little); the last column, the same batch given the true "
+    "orientation, shows how much of the shoulder error is that. The wrist then follows the "
+    "shoulder: the smoother's wrist lies on the estimated sphere, so the shoulder's error "
+    "along the camera's line of sight becomes the wrist's, and the wrist goal (within 20 % "
+    "of the declared arm's 0.6 cm) would need the shoulder to a few mm. Declared, "
+    "tape-measured lengths with `shoulder_m = \"auto\"` remove two of the five unknowns; "
+    "a longer or more varied stretch (a calibration movement sweeping the forearm through "
+    "its range) narrows the cap's ambiguity.")
 
 
 def main() -> None:

@@ -43,6 +43,22 @@ def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
                                  prepared.projection, session.imu.forearm_unit, declared, st)
 
 
+def estimate_with_offset(session: Session, prepared, prepare_again):
+    """The arm, and the IMU's offset with it: the offset was set before the arm was known (its
+    depths then from the first detection's range, no sphere), so it is set again with the
+    estimated arm's depths, "auto" estimated or a declared value checked (and warned about,
+    pipeline/imu_offset.py), and an "auto" offset's arm is estimated again at the new offset.
+    ``prepare_again(session)`` prepares a session whose arm is declared. Returns the estimate
+    and the preparation it belongs to."""
+    est = estimate(session, prepared)
+    known = with_arm(session, est.shoulder, est.upper_arm_m, est.forearm_m)
+    known = dataclasses.replace(known, arm=dataclasses.replace(known.arm, auto=()))
+    again = prepare_again(known)
+    if session.sync.imu_offset_s != "auto":
+        return est, dataclasses.replace(prepared, imu_offset=again.imu_offset)
+    return estimate(session, again), again
+
+
 def with_arm(session: Session, shoulder, upper_arm_m: float, forearm_m: float) -> Session:
     arm = dataclasses.replace(session.arm, shoulder_m=np.asarray(shoulder, float),
                               upper_arm_m=float(upper_arm_m), forearm_m=float(forearm_m))
