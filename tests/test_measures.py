@@ -206,3 +206,20 @@ def test_repeated_reaches_are_measured_per_segment():
         assert r[("straightness", str(n))]["value"] == pytest.approx(1.0, abs=2e-3)
     assert r[("wrist_path_length", "session")]["value"] == pytest.approx(6 * D, rel=3e-3)
     assert r[("time_to_peak_speed", "session")]["value"].startswith("not computable: 6 movements")
+
+
+def test_posterior_draws_have_the_stated_sd_correlation_and_smoothness():
+    """smooth_draws: marginal SD σ, correlation exp(−τ²/τc²) (1/e at τc), and velocity SD
+    √2·σ/τc (the closed form of a Gaussian-correlated process; an AR(1) process with the same σ
+    and τc had σ·√(2/(τc·Δt)), 14 σ/s at 100 Hz, which made peak-speed SDs as large as the peak)."""
+    from dataclasses import replace
+
+    from armtrack_cli.measures.base import DEFAULT
+    from armtrack_cli.measures.uncertainty import smooth_draws
+
+    t = np.arange(0, 20, 0.01)
+    e = smooth_draws(t, np.full((t.size, 2), 0.005), replace(DEFAULT, draws=200, draw_corr_s=1.0))
+    assert e.std() == pytest.approx(0.005, rel=0.05)
+    r = np.mean(e[:, :-100] * e[:, 100:]) / np.mean(e**2)  # lag 1 s
+    assert r == pytest.approx(np.exp(-1), abs=0.05)
+    assert (np.diff(e, axis=1) / 0.01).std() == pytest.approx(np.sqrt(2) * 0.005, rel=0.05)

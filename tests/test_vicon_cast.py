@@ -83,10 +83,11 @@ clusters = {{ RGTH = "RUAR", RLEP = "RUAR", RMEP = "RUAR", RSPR = "RLAR", RSPU =
 
 
 @needs_ue_adl
-@pytest.mark.parametrize("trial, three_point, isb, isb_upper", [
+@pytest.mark.parametrize("trial, three_point, isb, isb_upper, functional", [
     # measured (validation/ue_adl.py); the authors' RoM: DR1 63.9, CR1 64.5, FR1 81.0 deg
-    ("DR1", -9.3, -4.5, -7.9), ("CR1", -7.2, 1.0, -5.7), ("FR1", -9.3, 7.0, 2.4)])
-def test_ue_adl_elbow_rom_beside_the_authors(trial, three_point, isb, isb_upper):
+    ("DR1", -9.3, -4.5, -7.9, -2.9), ("CR1", -7.2, 1.0, -5.7, 0.9),
+    ("FR1", -9.3, 7.0, 2.4, 0.0)])
+def test_ue_adl_elbow_rom_beside_the_authors(trial, three_point, isb, isb_upper, functional):
     from armtrack_cli.compare.peer_angles import rom_beside_peer
 
     peer = pd.read_csv(UE_ADL / f"ADL001{trial}angles.csv")
@@ -99,11 +100,13 @@ def test_ue_adl_elbow_rom_beside_the_authors(trial, three_point, isb, isb_upper)
     # three-point angle: 4-10 deg below their Euler angle (no segment axes; see docs)
     assert -10.5 < r["three_point_rom_deg"] - p < 0
     for key, want in (("three_point", three_point), ("isb", isb),
-                      ("isb_upper_epicondyles", isb_upper)):
+                      ("isb_upper_epicondyles", isb_upper), ("functional_axis", functional)):
         assert r[f"{key}_rom_deg"] - p == pytest.approx(want, abs=0.1), key
     # ISB frames from the clusters: within 5 deg on the drinking and combing trials
     if trial in ("DR1", "CR1"):
         assert abs(r["isb_rom_deg"] - p) < 5.0
+    # with the functional flexion axis (from the trial's own motion): within 5 deg on each
+    assert abs(r["functional_axis_rom_deg"] - p) < 5.0
 
 
 def test_info_describes_a_lone_vicon_csv(tmp_path):

@@ -46,19 +46,36 @@ def calibrate(static_cluster: np.ndarray, static_landmark: np.ndarray
     return ref, point
 
 
+def poses(ref: np.ndarray, cluster: np.ndarray, *, min_markers: int = 3
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """(R (N, 3, 3), t (N, 3)): each frame's rigid fit of ``ref`` (K, 3) onto ``cluster``
+    (N, K, 3), x_lab = R·x_ref + t (rigid_fit, all frames with every marker seen at once);
+    NaN where fewer than ``min_markers`` are seen."""
+    n = cluster.shape[0]
+    R, t = np.full((n, 3, 3), np.nan), np.full((n, 3), np.nan)
+    seen = np.isfinite(cluster).all(axis=2) & np.isfinite(ref).all(axis=1)
+    full = seen.all(axis=1) & (seen.shape[1] >= min_markers)
+    if full.any():  # Umeyama 1991, eqs. 34-41 (c = 1), batched over frames
+        r0, c0 = ref - ref.mean(axis=0), cluster[full]
+        c_mean = c0.mean(axis=1)
+        U, _, Vt = np.linalg.svd(np.einsum("ki,nkj->nij", r0, c0 - c_mean[:, None]))
+        d = np.sign(np.linalg.det(np.swapaxes(Vt, 1, 2) @ np.swapaxes(U, 1, 2)))
+        D = np.zeros((d.size, 3, 3))
+        D[:, 0, 0], D[:, 1, 1], D[:, 2, 2] = 1.0, 1.0, np.where(d == 0, 1.0, d)
+        R[full] = np.swapaxes(Vt, 1, 2) @ D @ np.swapaxes(U, 1, 2)
+        t[full] = c_mean - R[full] @ ref.mean(axis=0)
+    for i in np.flatnonzero(~full & (seen.sum(axis=1) >= min_markers)):
+        k = seen[i]
+        R[i], t[i] = rigid_fit(ref[k], cluster[i, k])
+    return R, t
+
+
 def carry(ref: np.ndarray, point: np.ndarray, cluster: np.ndarray, *,
           min_markers: int = 3) -> np.ndarray:
     """(N, 3) landmark positions: ``point`` carried by the rigid fit of ``ref`` (K, 3) onto
     each frame's ``cluster`` (N, K, 3); NaN where fewer than ``min_markers`` are seen."""
-    n = cluster.shape[0]
-    out = np.full((n, 3), np.nan)
-    seen = np.isfinite(cluster).all(axis=2) & np.isfinite(ref).all(axis=1)
-    for i in range(n):
-        k = seen[i]
-        if k.sum() >= min_markers:
-            R, t = rigid_fit(ref[k], cluster[i, k])
-            out[i] = R @ point + t
-    return out
+    R, t = poses(ref, cluster, min_markers=min_markers)
+    return R @ point + t
 
 
 def carry_landmark(static, trial, landmark: str, cluster: list[str]) -> np.ndarray:

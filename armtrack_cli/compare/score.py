@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.compare.errors import error_rows, truth_at
+from armtrack_cli.compare.residual import winter_cutoff
 from armtrack_cli.measures.signal import lowpass
 
 JOINTS = ("wrist", "elbow", "shoulder")
@@ -37,11 +38,22 @@ def lowpassed(truth: Truth, cutoff_hz: float) -> Truth:
                            for k, x in truth.xyz.items()}, truth.rate_hz)
 
 
-def _runs_lowpassed(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
+def denoised(truth: Truth, max_hz: float) -> Truth:
+    """The truth's markers low-passed at their own rate, each coordinate of each run of seen
+    frames at the cut-off Winter's residual analysis picks for it (compare.residual; at most
+    max_hz): the reference for the clinical measures. A fixed 6 Hz lets a slow reach's marker
+    noise raise its peak speed by 2–3 % (docs/validation-measures.md)."""
+    return Truth(truth.t, {k: _runs_lowpassed(x, truth.rate_hz, max_hz, residual=True)
+                           for k, x in truth.xyz.items()}, truth.rate_hz)
+
+
+def _runs_lowpassed(x: np.ndarray, fs: float, fc: float, *, residual: bool = False) -> np.ndarray:
     out = x.copy()
     edges = np.flatnonzero(np.diff(np.r_[0, np.isfinite(x).all(axis=1).astype(int), 0]))
     for a, b in zip(edges[::2], edges[1::2]):
-        out[a:b] = lowpass(x[a:b], fs, fc)
+        for j in range(x.shape[1]):
+            f = winter_cutoff(x[a:b, j], fs, max_hz=fc) if residual else fc
+            out[a:b, j] = lowpass(x[a:b, j:j + 1], fs, f)[:, 0]
     return out
 
 

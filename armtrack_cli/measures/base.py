@@ -27,7 +27,7 @@ class Settings:
     plane_min_elevation_deg: float = 10.0  # plane of elevation undefined closer to gimbal lock
     neutral_s: float = 1.0  # the first second is the neutral pose for relative angles
     draws: int = 40  # posterior draws for uncertainty
-    draw_corr_s: float = 1.0  # correlation time of the estimation error (AR(1)); measured 0.5-1.9 s
+    draw_corr_s: float = 1.0  # correlation time of the estimation error (Gaussian); measured 0.5-1.9 s
     #                           on the simulated circle-01 (pf-constraint), docs/measures.md
     seed: int = 0
 

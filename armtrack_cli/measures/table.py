@@ -12,7 +12,7 @@ from armtrack_cli.measures import angles, path, smoothness
 from armtrack_cli.measures.base import DEFAULT, NotComputable, Settings
 from armtrack_cli.measures.segments import segments
 from armtrack_cli.measures.signal import speed_profile
-from armtrack_cli.measures.uncertainty import ar1_draws, spread
+from armtrack_cli.measures.uncertainty import smooth_draws, spread
 
 REACH_TASKS = ("reach", "reach-grasp")
 ANGLES = {  # name: unit with its convention
@@ -153,8 +153,8 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
     """SD of every measure over draws from the posterior (uncertainty.py)."""
     if inp.wrist_sd is None and inp.angles_sd is None:
         return {}
-    e_w = ar1_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else None
-    e_a = (ar1_draws(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
+    e_w = smooth_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else None
+    e_a = (smooth_draws(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
            if inp.angles_sd is not None else None)
     draws = []
     for i in range(s.draws):

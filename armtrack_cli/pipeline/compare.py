@@ -9,7 +9,7 @@ from typing import Any
 import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
-from armtrack_cli.compare.score import JOINTS, Truth, lowpassed, score, truth_markers
+from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_markers
 from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.methods import METHODS
@@ -87,7 +87,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     trajs = {m: read_trajectory(work / f"trajectory-{m}.csv") for m in methods}
     truth, offset = synchronised_truth(session, trajs, eye=_camera_centre(work.path))
     rows, mrows, excluded = [], [], {}
-    for_measures = lowpassed(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
+    for_measures = denoised(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
     for m, traj in trajs.items():
         t = traj["t"].to_numpy()
         if truth.t[0] > t[-1] or truth.t[-1] < t[0]:

@@ -1,0 +1,41 @@
+"""A marker's low-pass cut-off chosen from its own data: Winter's residual analysis (Winter,
+Biomechanics and Motor Control of Human Movement, 4th ed. 2009, §3.4.4.3).
+
+The residual R(fc) = √(mean (x − x̂_fc)²) between a coordinate and its low-passed copy falls as
+the cut-off fc rises. Above the signal's band only noise is left to remove, and R falls along a
+straight line whose intercept at fc = 0, a, is the RMS of the noise; the cut-off is where R
+meets that level: below it the filter starts to take signal (R > a), above it lets noise through.
+A slow reach recorded with 0.3 mm of noise gets 2–3 Hz, a fast one more; the noise a 6 Hz filter
+lets through would otherwise raise a maximum such as the peak speed by 2–3 % on a 0.09 m/s reach
+(docs/validation-measures.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import butter, sosfiltfilt
+
+MIN_HZ = 1.0  # the lowest cut-off tried: a marker at rest is not filtered below it
+
+
+def residuals(x: np.ndarray, fs: float, cutoffs: np.ndarray) -> np.ndarray:
+    """(len(cutoffs),) R(fc) of one coordinate x (N,): 4th-order zero-lag Butterworth."""
+    return np.array([np.sqrt(np.mean((x - sosfiltfilt(butter(4, fc, fs=fs, output="sos"), x)) ** 2))
+                     for fc in cutoffs])
+
+
+def winter_cutoff(x: np.ndarray, fs: float, *, max_hz: float) -> float:
+    """The cut-off (Hz, MIN_HZ … max_hz) where R(fc) falls to the noise level a, the intercept of
+    the straight line fitted to R over the noise band (0.3–0.45 × fs/2; Winter 2009 §3.4.4.3).
+    x: (N,) one coordinate, evenly sampled at fs; max_hz when too short to tell (< 2 s)."""
+    nyq = fs / 2.0
+    if x.size < 2 * fs or max_hz <= MIN_HZ or 0.3 * nyq <= max_hz:
+        return max_hz
+    noise_band = np.linspace(0.3 * nyq, 0.45 * nyq, 8)
+    slope, a = np.polyfit(noise_band, residuals(x, fs, noise_band), 1)
+    if not np.isfinite(a) or a <= 0:
+        return max_hz
+    grid = np.arange(MIN_HZ, max_hz + 1e-9, 0.25)
+    r = residuals(x, fs, grid)
+    below = np.flatnonzero(r <= a)
+    return float(grid[below[0]]) if below.size else max_hz
