@@ -157,7 +157,11 @@ READING = (
     "orientation, shows how much of the shoulder error is that. The wrist then follows the "
     "shoulder: the smoother's wrist lies on the estimated sphere, so the shoulder's error "
     "along the camera's line of sight becomes the wrist's, and the wrist goal (within 20 % "
-    "of the declared arm's 0.6 cm) would need the shoulder to a few mm. Declared, "
+    "of the declared arm's 0.6 cm) would need the shoulder to a few mm. The lengths' SDs "
+    "(3-5 cm for L1) say the data hardly fix them: the estimates sit near the weak "
+    "anthropometric prior (fuse/arm_auto.py: 0.30 and 0.26 m, SD 5 cm), which is 1 cm from "
+    "the simulator's arm (0.31, 0.27 m), so the length errors are the prior's, and their "
+    "meeting the 1 cm goal says little. Declared, "
     "tape-measured lengths with `shoulder_m = \"auto\"` remove two of the five unknowns; "
     "a longer or more varied stretch (a calibration movement sweeping the forearm through "
     "its range) narrows the cap's ambiguity.")
