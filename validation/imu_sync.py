@@ -109,10 +109,14 @@ READING = (
     "estimate). Reach has the largest SDs (its motion is mostly along one line) but meets "
     "the goal. A declared offset is warned about beyond 3 SD and 50 ms "
     "(pipeline/imu_offset.py), which a 0.2 s error always passes (B). The ground truth's "
-    "offset (C) comes from the whole trajectory against Qualisys at 100 Hz. With the arm "
-    "\"auto\" the IMU offset is estimated before the arm (its depths at the first "
-    "detection's range, no sphere), and the arm's own error dominates the RMSE "
-    "(docs/validation-arm-auto.md).")
+    "offset (C) comes from the trajectory's residual against Qualisys across the camera's "
+    "rays (compare/sync.py): along the ray a one-camera tracker's depth error follows the "
+    "motion and pulled the whole-residual estimate by 6-7 ms on the rectangle; its SD is "
+    "still the whole residual's, so it is cautious. With the arm \"auto\" the IMU offset is "
+    "first estimated without the arm (depths at the first detection's range), then again "
+    "with the estimated arm's sphere, and the arm estimated again at it "
+    "(pipeline/arm_model.estimate_with_offset); the arm's own error then dominates the "
+    "RMSE (D; docs/validation-arm-auto.md), as it does with the offset declared.")
 
 
 def main() -> None:
