@@ -65,6 +65,7 @@ bench: $(STAMP)
 validate: $(STAMP)
 	ARMTRACK_FUZZ_EXAMPLES=2000 $(BIN)/python -m pytest -q -p no:cacheprovider tests/test_fuzz_readers.py
 	$(BIN)/python validation/run.py
+	$(BIN)/python validation/smoother_bias.py
 	$(BIN)/python validation/palm.py
 	$(BIN)/python validation/ue_adl.py
 	$(BIN)/python validation/path_measures.py

@@ -14,6 +14,7 @@ from armtrack_cli.simulate.arm_session import ArmSimSettings
 from .conftest import run_cli
 
 METHODS = ("inertial", "ekf", "ukf", "pf", "pf-constraint", "arm-smoother")
+GYRO_BIAS = float(np.deg2rad(0.5))  # rad/s per axis (random sign) on the occluded session
 
 
 @pytest.fixture(scope="module")
@@ -23,7 +24,8 @@ def sessions(tmp_path_factory):
     for name, st in {"circle": ArmSimSettings(task="circle", duration_s=12.0, seed=3),
                      "occluded": ArmSimSettings(task="reach", duration_s=12.0, seed=1,
                                                 occlusions=((4.0, 0.5), (7.5, 0.5)),
-                                                distractor=True, drop_rate=0.02, gt_gaps=2)}.items():
+                                                distractor=True, drop_rate=0.02, gt_gaps=2,
+                                                imu_errors={"gyro_bias": GYRO_BIAS})}.items():
         pipeline.simulate(root / name, st)
         r = pipeline.run(root / name, through="fuse", methods=METHODS, seed=1)
         assert r["stages"] == {"calibrate": "ran", "detect": "ran",
@@ -46,14 +48,16 @@ def test_pf_constraint_meets_the_goals_on_a_circle(sessions):
 
 
 @pytest.mark.parametrize(("name", "rmse_cm", "mean_cm"), [("circle", 0.7, 0.3),
-                                                         ("occluded", 1.05, 0.8)])
+                                                         ("occluded", 0.7, 0.45)])
 def test_the_default_arm_smoother_meets_issue_14s_goals(sessions, name, rmse_cm, mean_cm):
     """Issue 14's goals on two fixed-seed sessions (the multi-seed study is `make validate`):
     wrist and elbow 3-D RMSE ≤ 0.7 cm, per-axis |mean| ≤ 0.3 cm, all within ±5 cm, and the
-    true error within 2 posterior SD on ≥ 90 % of frames. Met on the circle; on the occluded
-    reach (0.96 cm, −0.7 cm along the ray) not: there the camera ray grazes the arm sphere
-    and the posterior SD along the ray is 1.3-1.6 cm (docs/fusion.md, known limits), so the
-    bounds are what it reaches, and coverage is still asserted."""
+    true error within 2 posterior SD on ≥ 90 % of frames. Met on the circle (0.14 cm, mean
+    0.07 cm). The occluded reach is harder than the study's sessions: 12 s, two occlusions, a
+    distractor, 2 % of IMU packets dropped and a consumer-class gyro bias of 0.5 °/s per
+    axis, whose component about the vertical only the arm constraint sees (estimated
+    0.1 °/s short here, 1° of heading over the session): wrist 0.63 cm, mean 0.41 cm along
+    the camera ray, so its mean is held to 0.45."""
     folder, truth = sessions[name]
     _, d = _err(folder, truth, "arm-smoother")
     for joint in ("wrist", "elbow"):
@@ -71,28 +75,46 @@ def test_the_default_arm_smoother_meets_issue_14s_goals(sessions, name, rmse_cm,
 def test_arm_smoother_recovers_the_imus_errors(sessions):
     """The simulator's accelerometer bias (constant, body frame) and its orientation error
     (truth: the output orientation against the true one) are estimated: the corrected
-    orientation has less than half the raw one's error; the bias within 0.01 m/s² along the
-    IMU's z (near vertical here, told from tilt by gravity) and within 0.025 m/s² across it,
-    where a bias and a tilt error of the same horizontal acceleration (b ≈ g·δθ) are told
-    apart only by the changes of orientation, small in a circle on the table."""
-    from armtrack_cli.fuse.methods import run
-    from armtrack_cli.pipeline.fuse import prepare, settings_for
-    from armtrack_cli.session.config import load_session
-
+    orientation has a quarter of the raw one's error (0.13° against 1.05° RMS here) and the
+    bias is within 0.01 m/s² on every axis (0.007 here): the gyroscope measures the
+    orientation error's changes, so a tilt error is no longer free to stand in for a
+    horizontal bias (b ≈ g·δθ), which held the bias across the IMU's z to 0.025 m/s² when
+    δθ was a free Gauss–Markov process (``orientation_model = "gauss-markov"``)."""
     folder, truth = sessions["circle"]
-    s, _ = settings_for(None, (), kind="arm")
-    p = prepare(load_session(folder), folder / "armtrack", s)
-    x0 = np.r_[truth["frame_wrist"][p.frames[0]], 0, 0, 0]
-    P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
-    est = run("arm-smoother", p.inputs, x0, P0, p.projection, s, p.arm)
+    est, p = _smoothed(folder, truth)
     err = np.abs(np.array(est.summary["accel_bias_m_s2"]) - truth["acc_bias"])
-    assert err[2] < 0.01 and err[:2].max() < 0.025, err
+    assert est.summary["orientation_error_model"] == "gyro"
+    assert err.max() < 0.01, err
     from armtrack_cli.core import quaternion as Q
 
     q_true = truth["frame_q_WB"][p.frames]
     raw = np.degrees(Q.angle_between(p.inputs.q_WB, q_true))
     fixed = np.degrees(Q.angle_between(est.q_WB, q_true))
-    assert np.sqrt(np.mean(fixed**2)) < 0.5 * np.sqrt(np.mean(raw**2)), (fixed, raw)
+    assert np.sqrt(np.mean(fixed**2)) < 0.25 * np.sqrt(np.mean(raw**2)), (fixed, raw)
+
+
+def test_arm_smoother_estimates_the_gyros_bias(sessions):
+    """The occluded session's gyro reads 0.5 °/s too much or too little on each axis (random
+    signs, in the truth): the smoother's estimate has every sign right, within 0.03 °/s on
+    the IMU's x and y and 0.15 °/s on its z (near the vertical here, seen only through the
+    arm constraint: 0.1 °/s off)."""
+    folder, truth = sessions["occluded"]
+    est, _ = _smoothed(folder, truth)
+    got, want = np.array(est.summary["gyro_bias_deg_s"]), np.degrees(truth["gyro_bias"])
+    assert np.allclose(np.abs(want), 0.5) and (np.sign(got) == np.sign(want)).all()
+    assert np.abs(got - want)[:2].max() < 0.03 and abs(got[2] - want[2]) < 0.15, (got, want)
+
+
+def _smoothed(folder, truth):
+    from armtrack_cli.fuse.methods import run
+    from armtrack_cli.pipeline.fuse import prepare, settings_for
+    from armtrack_cli.session.config import load_session
+
+    s, _ = settings_for(None, (), kind="arm")
+    p = prepare(load_session(folder), folder / "armtrack", s)
+    x0 = np.r_[truth["frame_wrist"][p.frames[0]], 0, 0, 0]
+    P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
+    return run("arm-smoother", p.inputs, x0, P0, p.projection, s, p.arm), p
 
 
 def test_no_jump_and_no_flip_through_occlusions(sessions):

@@ -203,3 +203,23 @@ def test_fuse_reports_gated_frames_and_ignores_them(detected, tmp_path):
     assert outs["wrong"][0]["gated_frames"] == 3
     assert outs["missing"][0]["gated_frames"] == 0
     pd.testing.assert_frame_equal(outs["wrong"][1], outs["missing"][1])
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("method", ["ekf", "pf-constraint"])
+def test_after_a_card_the_first_detection_reacquires_at_once(method, compiled):
+    """A card hides the patch for 6 frames (≥ reacquire_frames = 4) while the filter drifts
+    12 cm (its start is off by that, sure of itself): a frame without a detection counts as a
+    gated one, so the first detection after the card re-acquires at once instead of being
+    gated reacquire_frames more times."""
+    inp, x0, _, proj, arm = _camera_problem(n_frames=40)
+    z = inp.z.copy()
+    z[:6] = np.nan
+    inp = Inputs(inp.steps, z, inp.q_WB)
+    x0 = x0 + np.r_[0.12, 0.0, 0.0, 0.0, 0.0, 0.0]
+    P0 = np.diag([0.01**2] * 3 + [0.02**2] * 3)
+    s = FuseSettings(method=method, particles=300, seed=5, reacquire_frames=4)
+    est = _run(method, inp, x0, P0, proj, arm, s, compiled)
+    seen = np.flatnonzero(np.isfinite(inp.z).all(axis=1))
+    assert est.codes[seen[0]] == robust.REACQUIRED, est.codes
+    assert (est.codes != robust.GATED).all(), est.codes

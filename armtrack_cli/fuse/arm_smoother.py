@@ -3,10 +3,14 @@ orientation error δθ and accelerometer bias b_a (and, with ``shoulder = "drift
 shoulder S) estimated over the whole session at once, as a Gauss–Newton iterated extended
 Kalman smoother. Equations and their derivation: docs/fusion.md.
 
-State, d = 12 (15 with the drifting shoulder):  x = (p, v, δθ, b_a[, S])  in W, m, m/s, rad, m/s².
+State, d = 15 (18 with the drifting shoulder):  x = (p, v, δθ, b_a, b_g[, S])  in W, m, m/s,
+rad, m/s², rad/s (b_g in B); d = 12 (15) without a gyroscope, or orientation_model = "gauss-markov".
   - process (Tao & Hu eqs. 4–6 with both IMU errors): fuse/imu_fold.py, linear given the IMU;
-    δθ first-order Gauss–Markov (SD orientation_sd_deg, time constant orientation_tau_s),
-    b_a a slow random walk, S first-order Gauss–Markov about the declared shoulder;
+    δθ changes as the gyroscope says (imu_fold.orientation_track: the output orientation's
+    rotation against the gyro's, plus G b_g for the gyro's bias) with a small random walk
+    (orientation_walk_deg); without a gyro, first-order Gauss–Markov (SD orientation_sd_deg,
+    time constant orientation_tau_s); b_a, b_g slow random walks; S first-order Gauss–Markov
+    about the declared shoulder;
   - camera (eq. 7): the patch pixel π(p), σ = pixel_sigma, gated by χ² (gate_chi2);
   - arm (eq. 15): |p − L2 u − S| − L1 = 0 ± constraint_sigma_m, with the forearm
     u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
@@ -27,17 +31,22 @@ from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_kernel import smooth
 
-P_, V_, TH, BA, SH = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
+P_, V_, TH, BA, BG = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
 STEP_TOL_M = 1e-5  # Gauss–Newton has converged when no wrist position moves more than this
 
 
 @dataclass(frozen=True)
 class ImuSamples:
-    """The IMU on the session clock: t (M,) s, q_WB (M, 4), f_B (M, 3) m/s² (specific force)."""
+    """The IMU on the session clock: t (M,) s, q_WB (M, 4), f_B (M, 3) m/s² (specific force),
+    w_B (M, 3) rad/s (gyroscope; None or NaN where the file has none)."""
 
     t: np.ndarray
     q_WB: np.ndarray
     f_B: np.ndarray
+    w_B: np.ndarray | None = None
+
+    def gyro(self) -> bool:
+        return self.w_B is not None and bool(np.isfinite(self.w_B).all())
 
 
 @dataclass(frozen=True)
@@ -48,6 +57,12 @@ class Smoothed:
     elbow_cov: np.ndarray  # (n, 3, 3)
     gated: np.ndarray  # (n,) bool, detections not used
     iterations: int
+    gyro: bool  # δθ tracked by the gyroscope (state holds b_g) or Gauss–Markov
+
+
+def shoulder_slice(d: int) -> slice:
+    """The drifting shoulder's place in a state of size d: always the last three."""
+    return slice(d - 3, d)
 
 
 def orientation_var(s: FuseSettings) -> np.ndarray:
@@ -57,9 +72,11 @@ def orientation_var(s: FuseSettings) -> np.ndarray:
 
 
 def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
-            imu_period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """F (n, d, d), b (n, d), Q (n, d, d) of the augmented state's steps (index 0 unused)."""
-    n, d = fd.dt.size, 12 if shoulder is None else 15
+            imu_period: float, track: imu_fold.OrientationTrack | None = None
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """F (n, d, d), b (n, d), Q (n, d, d) of the augmented state's steps (index 0 unused);
+    with ``track`` (the gyro's) δθ follows it and the state holds the gyro bias b_g."""
+    n, d = fd.dt.size, 12 + 3 * (track is not None) + 3 * (shoulder is not None)
     dt = fd.dt[:, None, None]
     eye = np.eye(3)
     F = np.tile(np.eye(d), (n, 1, 1))
@@ -72,11 +89,17 @@ def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
     Q[:, P_, P_] = q * dt**3 / 3 * eye
     Q[:, P_, V_] = Q[:, V_, P_] = q * dt**2 / 2 * eye
     Q[:, V_, V_] = q * dt * eye
-    phi = np.exp(-dt / s.orientation_tau_s)  # Gauss–Markov: Var stays orientation_sd²
-    F[:, TH, TH] = phi * eye
-    Q[:, TH, TH] = orientation_var(s) * (1 - phi**2)
+    if track is not None:  # δθ_k = δθ_{k−1} + Δθ_gyro + G b_g + walk (imu_fold.orientation_track)
+        b[:, TH], F[:, TH, BG] = track.dtheta, track.G
+        Q[:, TH, TH] = np.deg2rad(s.orientation_walk_deg) ** 2 * dt * eye
+        Q[:, BG, BG] = np.deg2rad(s.gyro_bias_walk_deg_s) ** 2 * dt * eye
+    else:
+        phi = np.exp(-dt / s.orientation_tau_s)  # Gauss–Markov: Var stays orientation_sd²
+        F[:, TH, TH] = phi * eye
+        Q[:, TH, TH] = orientation_var(s) * (1 - phi**2)
     Q[:, BA, BA] = s.accel_bias_walk**2 * dt * eye
     if shoulder is not None:
+        SH = shoulder_slice(d)
         phs = np.exp(-dt / s.shoulder_tau_s)
         F[:, SH, SH] = phs * eye
         b[:, SH] = (1 - phs[:, 0]) * shoulder
@@ -114,39 +137,43 @@ def forearm(q_hat: np.ndarray, dtheta: np.ndarray, arm: Arm) -> np.ndarray:
 
 
 def linearise(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, arm: Arm,
-              shoulder: np.ndarray):
+              shoulder: np.ndarray | None):
     """Camera rows (Hc (n, 2, d), zc (n, 2)) and arm row (Hk (n, d), zk (n,)) linearised about
     the trajectory X (n, d): h(x) ≈ h(x̄) + H (x − x̄), written as z' = H x with
-    z' = z − h(x̄) + H x̄ (camera) and z' = H x̄ − r(x̄) (arm, whose measurement is r = 0)."""
+    z' = z − h(x̄) + H x̄ (camera) and z' = H x̄ − r(x̄) (arm, whose measurement is r = 0).
+    ``shoulder`` None: the shoulder is the state's last three (drifting)."""
     n, d = X.shape
     p = X[:, P_]
     Hc = np.zeros((n, 2, d))
     Hc[:, :, P_] = projection_jacobians(proj, p)  # eq. 7
     zc = np.where(np.isfinite(z), z, 0.0) - proj(p) + np.einsum("kij,kj->ki", Hc, X)
     u = forearm(q_hat, X[:, TH], arm)
-    S = X[:, SH] if d == 15 else np.broadcast_to(shoulder, p.shape)
+    S = X[:, shoulder_slice(d)] if shoulder is None else np.broadcast_to(shoulder, p.shape)
     e = p - arm.L2 * u - S  # E − S (eq. 15)
     dist = np.linalg.norm(e, axis=1)
     nvec = e / dist[:, None]
     Hk = np.zeros((n, d))
     Hk[:, P_] = nvec
     Hk[:, TH] = -arm.L2 * np.cross(nvec, u)  # ∂u/∂δθ = [u]×: nᵀ[u]× = (n × u)ᵀ
-    if d == 15:
-        Hk[:, SH] = -nvec
+    if shoulder is None:
+        Hk[:, shoulder_slice(d)] = -nvec
     zk = np.einsum("kj,kj->k", Hk, X) - (dist - arm.L1)
     return Hc, zc, Hk, zk
 
 
 def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
-          shoulder: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """The first frame's prior: (p, v) as the other methods start, δθ, b_a about zero, S about
-    the declared shoulder."""
-    d = 12 if shoulder is None else 15
+          shoulder: np.ndarray | None, gyro: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The first frame's prior: (p, v) as the other methods start, δθ, b_a (, b_g) about
+    zero, S about the declared shoulder."""
+    d = 12 + 3 * gyro + 3 * (shoulder is not None)
     m, P = np.zeros(d), np.zeros((d, d))
     m[:6], P[:6, :6] = x0, P0
     P[TH, TH] = orientation_var(s)
     P[BA, BA] = s.accel_bias_sd**2 * np.eye(3)
+    if gyro:
+        P[BG, BG] = np.deg2rad(s.gyro_bias_sd_deg_s) ** 2 * np.eye(3)
     if shoulder is not None:
+        SH = shoulder_slice(d)
         m[SH], P[SH, SH] = shoulder, s.shoulder_sd_m**2 * np.eye(3)
     return m, P
 
@@ -159,18 +186,21 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     shoulder = np.asarray(arm.shoulder, float) if s.shoulder == "drifting" else None
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
     period = float(np.median(np.diff(imu.t)))
-    F, b, Q = process(fd, s, shoulder, period)
-    m0, Pm0 = prior(x0, P0, s, shoulder)
+    gyro = s.orientation_model == "gyro" and imu.gyro()
+    track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
+    F, b, Q = process(fd, s, shoulder, period, track)
+    m0, Pm0 = prior(x0, P0, s, shoulder, gyro)
     X = np.zeros((t_frames.size, m0.size))
     X[:, :6] = first
     if shoulder is not None:
-        X[:, SH] = shoulder
+        X[:, shoulder_slice(m0.size)] = shoulder
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
     rc, rk = s.pixel_sigma**2, s.constraint_sigma_m**2
     iterations, step = 0, np.inf
     while iterations < s.smoother_iterations and step >= STEP_TOL_M:
-        Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm, arm.shoulder)
+        Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm,
+                                   None if shoulder is not None else arm.shoulder)
         Xn, P, gated = smooth(m0, Pm0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk,
                               float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf)  # 0: off
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
@@ -180,4 +210,4 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     J[:, :, P_] = np.eye(3)
     J[:, :, TH] = -arm.L2 * imu_fold.skew(u)
     return Smoothed(X, P, corrected(q_hat, X[:, TH]), J @ P @ np.swapaxes(J, 1, 2), gated,
-                    iterations)
+                    iterations, gyro)

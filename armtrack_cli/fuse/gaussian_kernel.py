@@ -195,8 +195,9 @@ def _update(method, x, P, z, cam, dist, r2, Wm, Wc, scale, X, xo, Po, gate):
 def run(x0, P0, z, dt, dp, dv, q, cam, dist, r2, method, Wm, Wc, scale, gate, reacquire, infl):
     """methods.run_gaussian: started at frame 0 with (x0, P0); method 0 inertial (prediction
     only), 1 EKF, 2 UKF; R = r2 I. Detections gated at Mahalanobis² ``gate`` (0: off); after
-    ``reacquire`` gated in a row the next is used with infl (6,) added to P's diagonal
-    (fuse/robust.py). Returns mean (n_frames, 6), cov (n_frames, 6, 6), codes (n_frames,)."""
+    ``reacquire`` frames in a row gated or without a detection the next is used with infl
+    (6,) added to P's diagonal (fuse/robust.py). Returns mean (n_frames, 6), cov (n_frames,
+    6, 6), codes (n_frames,)."""
     n_frames = z.shape[0]
     mean = np.empty((n_frames, 6))
     cov = np.empty((n_frames, 6, 6))
@@ -232,6 +233,8 @@ def run(x0, P0, z, dt, dp, dv, q, cam, dist, r2, method, Wm, Wc, scale, gate, re
                 _update(method, x, P, z[k], cam, dist, r2, Wm, Wc, scale, X, xo, Po, np.inf)
             if codes[k] != 2:
                 x, xo, P, Po = xo, x, Po, P
+        elif method > 0 and run_gated >= 0:  # no detection: as a gated one (robust.blind)
+            run_gated += 1
         mean[k] = x
         cov[k] = P
     return mean, cov, codes

@@ -15,6 +15,13 @@ where dv, A_v, B_v are ∫ a(t) dt with a(t) = s + g, [s]×, R̂ in turn, and dp
 ∫ a(t) (t_k − t) dt. ``hold = "sample"`` holds each sample until the next (models.composite_steps,
 which this equals for δθ = b_a = 0); ``hold = "linear"`` interpolates linearly between samples
 (a first-order hold), which removes the half-sample lag (T_s / 2) of holding.
+
+``orientation_track`` measures how the orientation error changes between frames: the gyro
+sees the true rotation, the output orientation R̂ = exp([δθ]×) R the rotation plus the error's
+change, so over each IMU interval exp([δθ_{j+1}]×) = D_j exp([δθ_j]×) with
+D_j = R̂_{j+1} ΔR_Bᵀ R̂_jᵀ, ΔR_B = exp([ω̄ T_s]×) the gyro's body rotation (trapezoid ω̄).
+To first order δθ_k = δθ_{k−1} + Σ rotvec(D_j) + G_k b_g, where a gyro bias b_g (in B, in
+ω̂ = ω + b_g) adds G_k = ∫ R̂ dt over the interval.
 """
 
 from __future__ import annotations
@@ -39,6 +46,15 @@ class Folded:
     A_v: np.ndarray  # (n, 3, 3) ∂v_k/∂δθ
     B_p: np.ndarray  # (n, 3, 3) −∂p_k/∂b_a
     B_v: np.ndarray  # (n, 3, 3) −∂v_k/∂b_a
+
+
+@dataclass(frozen=True)
+class OrientationTrack:
+    """Per camera frame k, the orientation error's change over the step k-1 -> k (index 0
+    unused: zeros) as the gyro measures it, and its sensitivity to the gyro's bias."""
+
+    dtheta: np.ndarray  # (n, 3) rad, in W
+    G: np.ndarray  # (n, 3, 3) s, ∂δθ_k/∂b_g = ∫ R̂ dt over the interval
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -97,3 +113,35 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
     dt = np.r_[0.0, np.diff(t_frames)]
     return Folded(dt, acc_p[:, :, 0], acc_v[:, :, 0], acc_p[:, :, 1:4], acc_v[:, :, 1:4],
                   acc_p[:, :, 4:7], acc_v[:, :, 4:7])
+
+
+def _rotvec(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors (M, 3) of unit quaternions (M, 4) (w first), angle in [0, π]."""
+    q = q * np.where(q[:, :1] < 0, -1.0, 1.0)
+    s = np.linalg.norm(q[:, 1:], axis=1)
+    return (2 * np.arctan2(s, q[:, 0]) / np.maximum(s, 1e-300))[:, None] * q[:, 1:]
+
+
+def _at(t_src: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """y (M, ...) linearly interpolated at times t (inside t_src)."""
+    i = np.clip(np.searchsorted(t_src, t, side="right"), 1, t_src.size - 1)
+    f = ((t - t_src[i - 1]) / (t_src[i] - t_src[i - 1])).reshape((-1,) + (1,) * (y.ndim - 1))
+    return y[i - 1] * (1 - f) + y[i] * f
+
+
+def orientation_track(t_imu: np.ndarray, q_WB: np.ndarray, w_B: np.ndarray,
+                      t_frames: np.ndarray) -> OrientationTrack:
+    """The orientation error's change between frames t_frames (n,) from the IMU's output
+    orientation q_WB (M, 4) and gyro w_B (M, 3) rad/s at t_imu (M,) s (module docstring)."""
+    dt = np.diff(t_imu)
+    w = 0.5 * (w_B[1:] + w_B[:-1]) * dt[:, None]  # the body's rotation over each interval
+    ang = np.linalg.norm(w, axis=1)
+    dq = quat.from_axis_angle(w / np.maximum(ang, 1e-300)[:, None], ang)
+    D = quat.multiply(quat.multiply(q_WB[1:], quat.conjugate(dq)), quat.conjugate(q_WB[:-1]))
+    R = quat.to_matrix(q_WB)
+    cum = np.concatenate([np.zeros((1, 3)), np.cumsum(_rotvec(D), axis=0)])
+    cum_G = np.concatenate([np.zeros((1, 3, 3)),
+                            np.cumsum(0.5 * (R[1:] + R[:-1]) * dt[:, None, None], axis=0)])
+    c, G = _at(t_imu, cum, t_frames), _at(t_imu, cum_G, t_frames)
+    return OrientationTrack(np.concatenate([np.zeros((1, 3)), np.diff(c, axis=0)]),
+                            np.concatenate([np.zeros((1, 3, 3)), np.diff(G, axis=0)]))

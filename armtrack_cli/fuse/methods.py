@@ -4,14 +4,14 @@ that runs them (``run``). Inputs are per-frame arrays; outputs are per-frame est
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from armtrack_cli.filters import gaussian
 from armtrack_cli.filters.particles import ess, moments, weights
 from armtrack_cli.filters.resampling import scheme
-from armtrack_cli.fuse import arm_smoother, robust
+from armtrack_cli.fuse import arm_smoother, imu_bias, robust
 from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.settings import FuseSettings
 
@@ -79,6 +79,8 @@ def run_gaussian(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection, 
                 z = None
             elif codes[k] == robust.REACQUIRED:
                 st = gaussian.Gaussian(st.x, st.P + np.diag(_reacquire_inflation(s)))
+        elif method != "inertial":  # no detection: counts toward re-acquiring as a gated one
+            run_gated = robust.blind(run_gated)
         if method == "ekf":
             st = gaussian.ekf_update(st, z, h, H_jac, R)
         elif method == "ukf":
@@ -173,6 +175,8 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             if codes[k] != robust.GATED:
                 w = _colour_layer(x, px, w, inp.z[k], points[k], codes, k, proj, s, rng,
                                   constrained)
+        else:  # no detection: counts toward re-acquiring as a gated one
+            run_gated = robust.blind(run_gated)
         used = codes[k] not in (robust.NONE, robust.GATED)
         n_eff[k] = ess(w)
         if constrained:
@@ -289,6 +293,8 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         if arm is None:
             raise ValueError(f"{method} needs the arm model")
         est = run_particles(inp, x0, P0, proj, s, arm, constrained=True)
+        if method == "pf-constraint" and s.imu_bias_window_s > 0:
+            est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
             return run_arm_smoother(inp, x0, P0, proj, s, arm,
                                     smooth(est, inp, s, "pf-constraint").mean)
@@ -297,6 +303,20 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
     if s.smoother == "rts":
         est = smooth(est, inp, s, method)
     return est
+
+
+def run_bias_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+                       s: FuseSettings, arm: Arm, first: Estimates) -> Estimates:
+    """pf-constraint again on a_W less the acceleration error b_k fitted to the first run's
+    estimates of frames before k (fuse/imu_bias.py): still a forward filter."""
+    used = np.isin(first.codes, (robust.USED, robust.REACQUIRED, robust.RESEEDED))
+    t = inp.t if inp.t is not None else np.cumsum(inp.steps.dt)  # s; only differences count
+    b = imu_bias.causal_bias(t, first.mean[:, :3], used, inp.steps,
+                             window_s=s.imu_bias_window_s)
+    est = run_particles(replace(inp, steps=imu_bias.corrected(inp.steps, b)), x0, P0, proj, s,
+                        arm, constrained=True)
+    summary = {"imu_bias_rms_m_s2": round(float(np.sqrt(np.mean(np.sum(b**2, axis=1)))), 4)}
+    return replace(est, summary=summary)
 
 
 def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
@@ -311,8 +331,12 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
                "accel_bias_m_s2": [round(float(v), 4) for v in r.x[-1, arm_smoother.BA]],
                "orientation_error_rms_deg": round(float(np.degrees(
                    np.sqrt(np.mean(np.sum(th**2, axis=1))))), 3)}
+    if r.gyro:
+        summary["gyro_bias_deg_s"] = [round(float(v), 4) for v in
+                                      np.degrees(r.x[-1, arm_smoother.BG])]
+    summary["orientation_error_model"] = "gyro" if r.gyro else "gauss-markov"
     if s.shoulder == "drifting":
-        sh = r.x[:, arm_smoother.SH]
+        sh = r.x[:, arm_smoother.shoulder_slice(r.x.shape[1])]
         summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
         summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
             sh - arm.shoulder, axis=1).max()), 4)

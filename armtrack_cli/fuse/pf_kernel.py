@@ -306,6 +306,8 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
             seen, run_gated = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw, px,
                                               codes, run_gated, guard, constrained, w_prior,
                                               xr, seed_eps, m6, c6)
+        elif run_gated >= 0:  # no detection: as a gated one (robust.blind)
+            run_gated += 1
         if seen:
             uniform = False
         n_eff[k] = 1.0 / _sum_sq(w)

@@ -9,13 +9,19 @@ predicted cloud's weighted spread in the image plus the pixel noise. A gated det
 treated exactly as a missing one.
 
 **Re-acquiring.** Gating must not lock a filter out: a filter that drifted (a long occlusion)
-gates every detection that follows. After ``reacquire_frames`` gated detections in a row the
-next detection is used whatever its innovation: the Gaussian filters first add
+gates every detection that follows. After ``reacquire_frames`` frames in a row without a used
+detection (gated, or none at all: a gated detection counts exactly as a missing one, so a
+card that hid the patch for that long counts too) the next detection is used whatever its
+innovation: the Gaussian filters first add
 ``reacquire_sigma_m`` (position) and ``init_vel_sigma_m_s`` (velocity) to P's diagonal, so the
 update moves them onto the detection; the particle filters add the same spread to every
 particle (roughening) and pf-constraint also re-seeds (below). The next reacquire_frames
 detections are used ungated while the filter settles. A wrong detection that is isolated or
-short (≤ reacquire_frames frames in a row) therefore never changes the estimate.
+short (≤ reacquire_frames frames in a row) therefore never changes the estimate while the
+filter is following the patch; right after a stretch of reacquire_frames frames with nothing
+used (a card, the patch lost), the first detection is trusted over the filter's drifted
+prediction (measured in docs/validation-forward-filter.md: waiting for reacquire_frames more
+gated detections there kept the forward filter 40 cm off for a third of a second).
 
 **Re-seeding (pf-constraint).** The detection's camera ray meets the sphere on which the
 wrist must lie (|p − (S + L2 R u)| = L1, Tao & Hu eq. 15) at up to two points. When the colour
@@ -49,6 +55,12 @@ def gate(d2: float, gate_chi2: float, run: int, reacquire_frames: int) -> tuple[
     if run >= reacquire_frames:
         return REACQUIRED, -reacquire_frames
     return GATED, run + 1
+
+
+def blind(run: int) -> int:
+    """The gate's ``run`` after a frame without a detection: counted as a gated one (except in
+    the grace after a re-acquisition, which only detections count down)."""
+    return run + 1 if run >= 0 else run
 
 
 def pixel_mahalanobis2(px: np.ndarray, w: np.ndarray, z: np.ndarray, r2: float) -> float:

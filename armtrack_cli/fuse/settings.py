@@ -11,6 +11,7 @@ from armtrack_cli.core.methods import DEFAULT_METHOD
 SMOOTHERS = ("rts", "none")
 SHOULDERS = ("fixed", "drifting")
 HOLDS = ("linear", "sample")  # fuse/imu_fold.py
+ORIENTATION_MODELS = ("gyro", "gauss-markov")  # fuse/arm_smoother.py
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,9 @@ class FuseSettings:
     reseed_sigma_m: float = 0.005  # spread of the re-seeded particles about an intersection
     reseed_prior_m: float = 0.05  # SD added to the predicted cloud's when it weighs the two
     #                               intersections against each other
+    imu_bias_window_s: float = 0.0  # pf-constraint: > 0 runs it on a_W less the acceleration
+    #                                 error fitted causally over this many seconds of its own
+    #                                 earlier estimates (fuse/imu_bias.py); 0: off
     smoother: str = "rts"  # offline fixed-interval smoothing of the filtered estimates; the
     #                        tao2008-* recipes set "none" to reproduce the paper's filters
     seed: int = 0
@@ -55,6 +59,12 @@ class FuseSettings:
     #                                MTw's ~1° (0.6° per axis), measured best (docs/fusion.md)
     heading_sd_deg: float = 2.5  # … and about the vertical (heading), seen only by the arm
     orientation_tau_s: float = 2.0  # its correlation time (first-order Gauss–Markov)
+    orientation_model: str = "gyro"  # δθ's changes: as the gyroscope measures them ("gyro";
+    #                                  without a gyro, or "gauss-markov": the process above)
+    orientation_walk_deg: float = 0.05  # °/√s, δθ's change the gyro does not explain (its
+    #                                     angle random walk: an MTw's 0.01 °/s/√Hz is 0.01)
+    gyro_bias_sd_deg_s: float = 0.5  # °/s per axis, prior of the gyro's bias
+    gyro_bias_walk_deg_s: float = 0.001  # °/s/√s, its random walk
     accel_bias_sd: float = 0.05  # m/s² per axis, prior of the accelerometer bias
     accel_bias_walk: float = 0.001  # m/s²/√s, its random walk
     imu_hold: str = "linear"  # IMU between samples: "linear" (first-order hold) or "sample"
@@ -79,11 +89,14 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
         raise ConfigError(where, f"[fuse] smoother = {s.smoother!r} is not a smoother",
                           did_you_mean(s.smoother, SMOOTHERS, what="smoothers"))
     if not (s.gate_chi2 >= 0 and s.reacquire_frames >= 1 and 0 <= s.reseed_share <= 1
-            and s.reseed_ess >= 0 and s.reseed_sigma_m >= 0 and s.reseed_prior_m >= 0):
-        raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_* are out of range",
+            and s.reseed_ess >= 0 and s.reseed_sigma_m >= 0 and s.reseed_prior_m >= 0
+            and s.imu_bias_window_s >= 0):
+        raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_*, imu_bias_window_s "
+                          "are out of range",
                           "gate_chi2 ≥ 0 (0: off), reacquire_frames ≥ 1, 0 ≤ reseed_share ≤ 1, "
-                          "reseed_ess, reseed_sigma_m, reseed_prior_m ≥ 0")
-    for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS)):
+                          "reseed_ess, reseed_sigma_m, reseed_prior_m, imu_bias_window_s ≥ 0")
+    for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS),
+                              ("orientation_model", s.orientation_model, ORIENTATION_MODELS)):
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",
                               did_you_mean(value, valid, what="choices"))

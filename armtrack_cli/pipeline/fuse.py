@@ -99,7 +99,7 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     steps = models.composite_steps(t_imu, a_w, t_f[frames], accel_noise=s.accel_noise,
                                    imu_period=1.0 / imu.rate_hz)
     inputs = Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu, t_f[frames]),
-                    t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc[ok]))
+                    t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc[ok], imu.gyr[ok]))
     return Prepared(t_f, frames, inputs, proj, arm, how, q_anch)
 
 
