@@ -11,7 +11,7 @@ import pandas as pd
 from armtrack_cli.compare.errors import COLUMNS, table_one
 from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_markers
 from armtrack_cli.compare.sync import estimate_offset
-from armtrack_cli.core.errors import DataError
+from armtrack_cli.core.errors import ArmtrackError, DataError
 from armtrack_cli.core.methods import METHODS
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
@@ -69,9 +69,10 @@ def synchronised_truth(session: Session, trajs: dict, *, eye=None) -> tuple[Trut
 def _camera_centre(work: Path):
     """The camera's centre in W from calibrate's camera.yaml in the work folder (None without
     one: the offset then weighs the whole residual)."""
-    if not (work / "camera.yaml").is_file():
+    try:
+        return read_calibrated_camera(work / "camera.yaml").centre_W
+    except ArmtrackError:  # not calibrated here (compare needs only the trajectories)
         return None
-    return read_calibrated_camera(work / "camera.yaml").centre_W
 
 
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
