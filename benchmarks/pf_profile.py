@@ -10,14 +10,13 @@ import numpy as np
 from numba import njit
 from timing import best_of  # noqa: I001  (benchmarks/ is on sys.path)
 
-from armtrack_cli.filters import sfc64
 from armtrack_cli.fuse import pf_kernel as K
 
 
 @njit
 def _normals(r, s, eps):
     for _ in range(r):
-        K.fill_normals(s, eps.T)
+        K.fill_normals(s, eps)
 
 
 @njit
@@ -46,6 +45,12 @@ def _take(r, xs, idx, xr):
 
 
 @njit
+def _gate(r, px, w, z):
+    for _ in range(r):
+        K._pixel_mahalanobis2(px, w, z, 16.0)
+
+
+@njit
 def _walk(r, xs, eps, walk, centre, lw):
     for _ in range(r):
         K._walk_and_constrain(xs, eps, walk, centre, 0.31, 5000.0, lw)
@@ -62,22 +67,24 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
     rng = np.random.default_rng(0)
     xs = np.ascontiguousarray(np.c_[rng.normal(0.3, 0.01, (n, 3)),
                                     rng.normal(0.0, 0.05, (n, 3))].T)
-    s = sfc64.get_state(sfc64.generator(0))
+    s = np.array([2026, 0], np.uint64)  # a splitmix stream (key, counter)
     eps = np.empty((12, n))
-    K.fill_normals(s, eps.T)
+    K.fill_normals(s, eps)
     cam = np.r_[1.0, 0, 0, 0, -1, 0, 0, 0, -1, -0.3, 0.2, 1.6, 600, 610, 320, 240]
     dist = np.array([0.1, -0.05, 0.001, -0.002, 0.01])
     dt, d3, ace = np.full(4, 1 / 30), np.zeros((4, 3)), np.full((4, 3), 1e-3)
     z, w, lw = np.array([320.0, 240.0]), np.full(n, 1 / n), -rng.uniform(0, 5, n)
     idx, xr = np.empty(n, np.int64), np.empty_like(xs)
-    work, start = np.empty((3, n)), np.empty(n + 1, np.int64)
+    work, start = np.empty((3, n)), np.empty(2 * n + 2, np.int64)
     walk, centre = np.r_[np.full(3, 0.005), np.full(3, 0.01)], np.array([0.1, 0.45, 0.32])
     mean, cov = np.empty(6), np.empty((6, 6))
-    cases = [("12 standard normals per particle (SFC64, ziggurat)", 1, _normals, (s, eps)),
+    px = np.ascontiguousarray(np.c_[rng.normal(320, 20, n), rng.normal(240, 20, n)].T)
+    cases = [("12 standard normals per particle (SplitMix64, ziggurat)", 1, _normals, (s, eps)),
              ("predict and weigh by the detection (eqs. 10, 11)", 1, _predict_weigh,
               (xs.copy(), eps, dt, d3, ace, z, cam, dist, w, np.empty(n), np.empty((2, n)))),
              ("normalise the weights (exp)", 2, _normalise, (lw, w)),
              ("residual resampling", 2, _resample, (w, s, idx, work, start)),
+             ("χ² gate on the predicted pixels", 1, _gate, (px, w, z)),
              ("gather the resampled particles", 2, _take, (xs, idx, xr)),
              ("random walk and arm constraint (eqs. 15-18)", 1, _walk,
               (xs.copy(), eps, walk, centre, np.empty(n))),

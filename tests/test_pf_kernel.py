@@ -45,3 +45,39 @@ def test_normalise_is_the_references_weights(case):
     w = np.empty_like(lw)
     pf_kernel._normalise(lw, w)
     np.testing.assert_allclose(w, weights(lw), rtol=1e-14, atol=0)  # NaN: uniform, as there
+
+
+def _weights(case, n, rng):
+    if case == "spread":
+        w = rng.gamma(0.5, size=n)
+    elif case == "one dominates":
+        w = np.full(n, 1e-9)
+        w[n // 3] = 1.0
+    elif case == "many zero":
+        w = rng.gamma(0.5, size=n) * (rng.random(n) < 0.1)
+        w[n // 2] += 0.1  # not all zero
+    else:  # "ties": exact multiples of 1/n, every fractional part zero but a few
+        w = rng.integers(0, 3, n).astype(float)
+        w[:3] += 0.25
+    return w / w.sum()
+
+
+@pytest.mark.parametrize("scheme", list(pf_kernel.RESAMPLING))
+@pytest.mark.parametrize("case", ["spread", "one dominates", "many zero", "ties"])
+def test_resampling_kernel_is_the_references(scheme, case):
+    """The kernel's ancestor indices are filters/resampling.py's, index for index, for the
+    same stream of uniforms (residual's counted draws too), and the stream ends alike. (Not
+    for weights whose N w_i fall on integers up to round-off, e.g. all equal: there the
+    kernel's sum of the weights, in another order, may floor one the other way.)"""
+    from armtrack_cli.filters import splitmix
+    from armtrack_cli.filters.resampling import SCHEMES
+    from armtrack_cli.fuse.pf_resample_kernel import _resample
+
+    rng = np.random.default_rng(4)
+    for n in (10, 333, 2000):
+        w = _weights(case, n, rng)
+        a, b = np.array([n, 11], np.uint64), np.array([n, 11], np.uint64)
+        idx, work, start = np.empty(n, np.int64), np.empty((3, n)), np.empty(2 * n + 2, np.int64)
+        _resample(w, a, pf_kernel.RESAMPLING[scheme], idx, work, start)
+        np.testing.assert_array_equal(idx, SCHEMES[scheme](w, splitmix.Stream(b)))
+        np.testing.assert_array_equal(a, b)

@@ -33,10 +33,17 @@ def fuse_lines(folder: str, r: dict[str, Any]) -> list[str]:
                        ("gated_frames", "reacquired", "reseeded") if r.get(k))
     return [f"{folder}: {r['method']}: {r['frames']} frames ({r['detections_used']} with a "
             f"detection{'; ' + guards if guards else ''}), {r['frames_per_s']:.0f} frames/s "
-            f"-> {r['trajectory']}"] + (
+            f"-> {r['trajectory']}"] + _setup(r) + (
         [f"  initialised from {r['initialised_from']}: residual {r['init_residual_px']} px, "
          f"{r['init_residual_mm']} mm"] if "init_residual_px" in r else []) + (
         ["  arm " + arm_estimate_line(r["arm_auto"])] if r.get("arm_auto") else []) + _imu_offset(r)
+
+
+def _setup(r: dict[str, Any]) -> list[str]:
+    """What frames/s leaves out: the compiled kernel's one-time set-up in this process."""
+    s = r.get("kernel_setup_s", 0)
+    return [f"  (the filter alone; its compiled kernel took {s:.1f} s to set up first)"] \
+        if s >= 0.05 else []
 
 
 def _imu_offset(r: dict[str, Any]) -> list[str]:

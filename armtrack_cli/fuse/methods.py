@@ -5,6 +5,7 @@ that runs them (``run``). Inputs are per-frame arrays; outputs are per-frame est
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -14,6 +15,9 @@ from armtrack_cli.filters.resampling import scheme
 from armtrack_cli.fuse import arm_smoother, imu_bias, robust
 from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.settings import FuseSettings
+
+if TYPE_CHECKING:  # numba's: imported only when a particle filter runs
+    from armtrack_cli.filters.splitmix import Stream
 
 
 @dataclass(frozen=True)
@@ -140,16 +144,18 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
     reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py)."""
-    from armtrack_cli.filters import sfc64  # numba's: imported only when a particle filter runs
+    from armtrack_cli.filters import splitmix  # numba's: imported only when a particle filter runs
 
-    rng = sfc64.generator(s.seed)  # numpy's SFC64, which the kernel draws from inline
+    rng = np.random.default_rng(s.seed)
     N = s.particles
     x = rng.multivariate_normal(x0, P0, size=N)
+    state = splitmix.stream(rng)  # every later draw: the kernel's and the reference's alike
     n_frames = inp.z.shape[0]
     points = (robust.ray_sphere_points(proj, arm, inp.z, inp.q_WB) if constrained
               else np.full((n_frames, 2, 3), np.nan))
     if compiled:
-        return _run_particles_compiled(inp, x, rng, proj, s, arm, constrained, points)
+        return _run_particles_compiled(inp, x, state, proj, s, arm, constrained, points)
+    rng = splitmix.Stream(state)
     resample = scheme(s.resampling)
     w = np.full(N, 1.0 / N)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
@@ -160,7 +166,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     ace = inp.steps.noise_factors()
     seen = np.isfinite(inp.z).all(axis=1)
     for k in range(n_frames):
-        eps = rng.standard_normal((N, 12 if constrained else 6))
+        eps = rng.standard_normal((12 if constrained else 6, N)).T  # (N, 12): the kernel's rows
         if k > 0:  # step 1: particle prediction from p¹ (eq. 10)
             x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
         if seen[k]:  # step 2: weights from the colour-tracking likelihood (eq. 11), gated
@@ -170,7 +176,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
                 run_gated, s.reacquire_frames)
             if codes[k] == robust.REACQUIRED:
                 robust.roughen(x, s.reacquire_sigma_m, s.init_vel_sigma_m_s,
-                               rng.standard_normal((N, 6)))
+                               rng.standard_normal((6, N)).T)
                 px = proj(x[:, :3])
             if codes[k] != robust.GATED:
                 w = _colour_layer(x, px, w, inp.z[k], points[k], codes, k, proj, s, rng,
@@ -203,7 +209,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
 
 def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
                   points: np.ndarray, codes: np.ndarray, k: int, proj: Projection,
-                  s: FuseSettings, rng: np.random.Generator, constrained: bool) -> np.ndarray:
+                  s: FuseSettings, rng: Stream, constrained: bool) -> np.ndarray:
     """Step 2's weights w ∝ w⁻ p(z | x) (eq. 11, 14) of the particles x (N, 6) whose pixels
     are px; pf-constraint first re-seeds x in place on the two ray-sphere points if it
     re-acquires or the weights collapse, and codes[k] says so (fuse/robust.py)."""
@@ -215,17 +221,16 @@ def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
         return w_new
     m, c = moments(x[:, :3], w)  # the predicted cloud, before the colour weights
     n0 = robust.branch_split(n_seed, points, m, c, s.reseed_prior_m)
-    robust.reseed(x, points, n0, s.reseed_sigma_m, rng.standard_normal((n_seed, 3)))
+    robust.reseed(x, points, n0, s.reseed_sigma_m, rng.standard_normal((3, n_seed)).T)
     if codes[k] == robust.USED:
         codes[k] = robust.RESEEDED
     d = proj(x[:, :3]) - z
     return weights(-inv2s2 * np.einsum("ij,ij->i", d, d), w)
 
 
-def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator,
+def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
                             constrained: bool, points: np.ndarray) -> Estimates:
-    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import pf_kernel
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
@@ -233,13 +238,11 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, rng: np.random.Generator
     cam, dist = _camera_arrays(proj)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
-    state = sfc64.get_state(rng)
     mean, cov, n_eff, codes = pf_kernel.run(
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
         float(s.pf_resample_ess), _guard(s, points))
-    sfc64.set_state(rng, state)
     return Estimates(mean, cov, n_eff, codes)
 
 
@@ -266,7 +269,6 @@ def load_kernels(method: str) -> None:
                       np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
                       np.ones(n, bool), 1.0, 13.8)
         method = "pf-constraint"
-    from armtrack_cli.filters import sfc64
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
     z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
@@ -278,7 +280,7 @@ def load_kernels(method: str) -> None:
                             gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0, 13.8, 10,
                             np.zeros(6))
     else:
-        pf_kernel.run(np.zeros((10, 6)), sfc64.get_state(sfc64.generator(0)), z, q, d3, d3, d3,
+        pf_kernel.run(np.zeros((10, 6)), np.zeros(2, np.uint64), z, q, d3, d3, d3,
                       d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
                       1.0, _guard(FuseSettings(particles=10), np.zeros((2, 2, 3))))
 

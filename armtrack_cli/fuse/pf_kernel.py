@@ -1,16 +1,16 @@
 """The particle filters of ``methods.run_particles`` compiled with numba: the same steps, in
 the same order, drawing the same random numbers from the same generator.
 
-The generator is numpy's SFC64, drawn inline (filters/sfc64.py) from its state (4,) uint64, so
-for one seed the kernel and the numpy reference see identical draws (eps (N, 12) per frame,
-(N, 6) for the plain PF, then the resampling uniforms); they differ only by the order of
-floating-point sums (tests/test_fuse_filters.py holds them equal to 1e-12). Every work array
-is allocated once per run. ``cache=True``: the compile happens once per install and is loaded
-from ``__pycache__`` afterwards.
+The random numbers come from filters/splitmix.py's counter-based stream, state (key, counter)
+uint64 (2,), drawn many at once in SIMD; the numpy reference draws the same numbers from the
+same stream (eps (12, N) per frame, (6, N) for the plain PF, then the resampling uniforms), so
+kernel and reference differ only by the order of floating-point sums (tests/test_fuse_filters.py
+holds them equal to 1e-12). Every work array is allocated once per run. ``cache=True``: the
+compile happens once per install and is loaded from ``__pycache__`` afterwards.
 
 Shapes: particles x (N, 6) = (p, v) in W (m, m/s), held inside as its transpose xs (6, N) so
 that every pass over the particles runs along contiguous rows (SIMD); the normals likewise as
-eps (12, N), filled in the reference's draw order; z (n_frames, 2) px, NaN = no detection.
+eps (12, N), the reference's draws in its order; z (n_frames, 2) px, NaN = no detection.
 The gate, roughening and re-seeding of fuse/robust.py draw their normals after eps, in the
 reference's order too (tests/test_gating.py holds kernel and reference equal with them active).
 The resampling schemes are in fuse/pf_resample_kernel.py.
@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from armtrack_cli.filters.sfc64 import fill_normals
+from armtrack_cli.filters.splitmix import fill_normals
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
 
 __all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
@@ -84,22 +84,54 @@ def _normalise(lw, w):
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _moments(xs, w, mean, cov, d):
     """Weighted mean Σ w_i x_i (6,) and covariance Σ w_i d_i d_iᵀ (6, 6), d_i = x_i − mean,
-    into mean, cov (as particles.moments; plain loops, so one core and no BLAS threads);
-    d (6, N) work."""
+    into mean, cov (as particles.moments): two passes over the particles, the 21 distinct
+    sums of the second in one loop (SIMD, one core, no BLAS). d (6, N) work, unused."""
     n = w.size
-    for a in range(6):
-        m = 0.0
-        for i in range(n):
-            m += w[i] * xs[a, i]
-        mean[a] = m
-        for i in range(n):
-            d[a, i] = xs[a, i] - m
+    m0 = m1 = m2 = m3 = m4 = m5 = 0.0
+    for i in range(n):
+        wi = w[i]
+        m0 += wi * xs[0, i]
+        m1 += wi * xs[1, i]
+        m2 += wi * xs[2, i]
+        m3 += wi * xs[3, i]
+        m4 += wi * xs[4, i]
+        m5 += wi * xs[5, i]
+    mean[0], mean[1], mean[2], mean[3], mean[4], mean[5] = m0, m1, m2, m3, m4, m5
+    c00 = c01 = c02 = c03 = c04 = c05 = c11 = c12 = c13 = c14 = c15 = 0.0
+    c22 = c23 = c24 = c25 = c33 = c34 = c35 = c44 = c45 = c55 = 0.0
+    for i in range(n):
+        wi = w[i]
+        d0, d1, d2 = xs[0, i] - m0, xs[1, i] - m1, xs[2, i] - m2
+        d3, d4, d5 = xs[3, i] - m3, xs[4, i] - m4, xs[5, i] - m5
+        e0, e1, e2, e3, e4 = wi * d0, wi * d1, wi * d2, wi * d3, wi * d4
+        c00 += e0 * d0
+        c01 += e0 * d1
+        c02 += e0 * d2
+        c03 += e0 * d3
+        c04 += e0 * d4
+        c05 += e0 * d5
+        c11 += e1 * d1
+        c12 += e1 * d2
+        c13 += e1 * d3
+        c14 += e1 * d4
+        c15 += e1 * d5
+        c22 += e2 * d2
+        c23 += e2 * d3
+        c24 += e2 * d4
+        c25 += e2 * d5
+        c33 += e3 * d3
+        c34 += e3 * d4
+        c35 += e3 * d5
+        c44 += e4 * d4
+        c45 += e4 * d5
+        c55 += wi * d5 * d5
+    c = (c00, c01, c02, c03, c04, c05, c11, c12, c13, c14, c15, c22, c23, c24, c25, c33,
+            c34, c35, c44, c45, c55)
+    t = 0
     for a in range(6):
         for b in range(a, 6):
-            c = 0.0
-            for i in range(n):
-                c += w[i] * d[a, i] * d[b, i]
-            cov[a, b] = cov[b, a] = c
+            cov[a, b] = cov[b, a] = c[t]
+            t += 1
 
 
 @njit(cache=True, error_model="numpy")
@@ -213,7 +245,7 @@ def _reseed(xs, w_prior, points, sigma, prior_m, state, seed_eps, m, c, d):
         q[b] = v @ np.linalg.solve(C, v)
     p0 = 1.0 / (1.0 + np.exp(min(0.5 * (q[0] - q[1]), 700.0)))
     n0 = int(np.floor(n_seed * p0 + 0.5))
-    fill_normals(state, seed_eps.T)  # the reference's (n_seed, 3), row by row
+    fill_normals(state, seed_eps)  # the reference's (3, n_seed)
     for j in range(3):
         for i in range(n_seed):
             xs[j, i] = points[0 if i < n0 else 1, j] + sigma * seed_eps[j, i]
@@ -244,8 +276,8 @@ def _gate_code(d2, gate, run_gated, reacquire):
 @njit(cache=True, error_model="numpy")
 def _roughen(xs, sd, state, eps):
     """robust.roughen: x_ij ± sd_j for every particle (the re-acquisition's spread); eps (6, N)
-    work, filled as the reference's (N, 6)."""
-    fill_normals(state, eps.T)
+    work, filled as the reference's (6, N)."""
+    fill_normals(state, eps)
     for j in range(6):
         for i in range(xs.shape[1]):
             xs[j, i] += sd[j] * eps[j, i]
@@ -280,7 +312,7 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
 def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
         constrained, scheme, resample_ess, guard):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
-    (eqs. 12-14). x (N, 6) the initial particles; state (4,) the SFC64 state (advanced);
+    (eqs. 12-14). x (N, 6) the initial particles; state (2,) the splitmix stream (advanced);
     ``guard`` = (points (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess,
     reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py.
     Returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
@@ -295,11 +327,11 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     w_prior, px = np.empty(N), np.empty((2, N))
     seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
     idx = np.empty(N, np.int64)
-    work, start = np.empty((3, N)), np.empty(N + 1, np.int64)
+    work, start = np.empty((3, N)), np.empty(2 * N + 2, np.int64)
     uniform = True  # every w_i is exactly 1/N
     run_gated = 0
     for k in range(n_frames):
-        fill_normals(state, eps.T)  # the reference's eps (N, 12), row by row
+        fill_normals(state, eps)  # the reference's eps (12, N)
         seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
                                   uniform, lw, px)
         if seen:  # the χ² gate, roughening and re-seeding

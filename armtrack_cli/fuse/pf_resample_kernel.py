@@ -1,14 +1,14 @@
 """The resampling of the compiled particle filters (fuse/pf_kernel.py): the schemes of
-filters/resampling.py drawing the same uniforms from the inline SFC64 generator
-(filters/sfc64.py), and the gather of the resampled particles (6, N)."""
+filters/resampling.py drawing the same uniforms from the same splitmix stream
+(filters/splitmix.py), and the gather of the resampled particles (6, N)."""
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from armtrack_cli.filters.sfc64 import fill_random
-from armtrack_cli.filters.sfc64 import random as uniform
+from armtrack_cli.filters.splitmix import fill_random
+from armtrack_cli.filters.splitmix import random as uniform
 
 RESAMPLING = {"residual": 0, "systematic": 1, "stratified": 2, "multinomial": 3}
 SUMS = {"reassoc"}  # sums over particles may be reordered (vectorised): round-off only
@@ -55,29 +55,11 @@ def _sorted_uniforms(s, k, work, start):
 @njit(cache=True, error_model="numpy")
 def _resample(w, s, scheme, idx, work, start):
     """Ancestor indices into idx (N,), as filters/resampling.py, drawing the same uniforms;
-    work (3, N) and start (N + 1,) as _sorted_uniforms takes them."""
+    work (3, N) floats, start (2N + 2,) int."""
     n = w.size
     cdf = work[2]
-    if scheme == 0:  # residual: floor(N w_i) copies, then R leftovers (Liu & Chen 1998)
-        total, nw = _total(w), work[1]
-        for i in range(n):  # N w_i and its fractional part (SIMD)
-            nw[i] = n * (w[i] / total)
-            cdf[i] = nw[i] - np.floor(nw[i])
-        m, acc = 0, 0.0
-        for i in range(n):
-            for _ in range(np.int64(nw[i])):
-                idx[m] = i
-                m += 1
-            acc += cdf[i]
-            cdf[i] = acc
-        k = n - m
-        if k == 0:
-            return
-        u = _sorted_uniforms(s, k, work, start)
-        top = cdf[-1]
-        for j in range(k):
-            u[j] *= top
-        _search_sorted_keys(cdf, u, idx, m)
+    if scheme == 0:
+        _residual(w, s, idx, work, start)
         return
     acc = 0.0
     for i in range(n):
@@ -98,6 +80,65 @@ def _resample(w, s, scheme, idx, work, start):
             for i in range(n):
                 u[i] = (i + u[i]) / n
     _search_sorted_keys(cdf, u, idx, 0)
+
+
+@njit(cache=True, error_model="numpy")
+def _residual(w, s, idx, work, start):
+    """Residual resampling (Liu & Chen 1998), filters/resampling.residual: floor(N w_i) copies
+    of each particle, then R = N − Σ floor(N w_i) draws from the fractional parts, emitted in
+    ascending order as the reference's searchsorted of its sorted uniforms emits them. The
+    draws are counted per particle instead of sorted: each u_j·top is looked up in the
+    cumulative fractional parts from a bucket table (one bucket per particle) and walked to
+    searchsorted's exact answer, #{cdf ≤ u_j·top} (at most N − 1). start (2N + 2,) int work."""
+    n = w.size
+    total, nw, cdf = _total(w), work[1], work[2]
+    for i in range(n):  # N w_i and its fractional part (SIMD)
+        nw[i] = n * (w[i] / total)
+        cdf[i] = nw[i] - np.floor(nw[i])
+    m, acc = 0, 0.0
+    for i in range(n):
+        m = _emit(idx, m, i, np.int64(nw[i]))
+        acc += cdf[i]
+        cdf[i] = acc
+    k = n - m
+    if k == 0:
+        return
+    u, top = work[0, :k], cdf[n - 1]
+    fill_random(s, u)
+    first, counts = start[:n + 1], start[n + 1:2 * n + 1]
+    first[:] = 0
+    counts[:] = 0
+    scale = n / top if top > 0 else 0.0
+    for i in range(n):  # first[b + 1]: how many cdf entries lie below bucket b + 1
+        first[max(0, min(np.int64(cdf[i] * scale), n - 1)) + 1] += 1  # NaN: bucket 0
+    for b in range(n):
+        first[b + 1] += first[b]
+    for j in range(k):
+        v = u[j] * top
+        i = first[min(np.int64(u[j] * n), n - 1)]
+        for _ in range(3):  # a bucket holds about one entry: three steps without a branch
+            i += np.int64((i < n) & (cdf[min(i, n - 1)] <= v))
+        while i < n and cdf[i] <= v:  # the rare rest, and round-off at bucket edges
+            i += 1
+        while i > 0 and cdf[i - 1] > v:
+            i -= 1
+        counts[min(i, n - 1)] += 1
+    for i in range(n):
+        m = _emit(idx, m, i, counts[i])
+
+
+@njit(cache=True, inline="always")
+def _emit(idx, m, i, c):
+    """idx[m : m + c] = i; returns m + c. Without a branch for the usual c ≤ 2: idx[m] and
+    idx[m + 1] are written whatever c (a later particle overwrites what was not its)."""
+    n = idx.size
+    if m < n:
+        idx[m] = i
+    if m + 1 < n:
+        idx[m + 1] = i
+    for t in range(m + 2, m + c):
+        idx[t] = i
+    return m + c
 
 
 @njit(cache=True, error_model="numpy")
