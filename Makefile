@@ -77,6 +77,7 @@ validate: $(STAMP)
 	$(BIN)/python validation/detect_distractor.py
 	$(BIN)/python validation/from_mocap.py
 	$(BIN)/python validation/imu_sync.py
+	$(BIN)/python validation/arm_auto.py
 	$(BIN)/python validation/forward_filter.py
 
 docs: $(STAMP)

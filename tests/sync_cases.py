@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from armtrack_cli.fuse import models
+from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.imu_sync import SyncProblem
 from armtrack_cli.simulate import imu_model, kinematics
 from armtrack_cli.simulate.arm_session import ArmSimSettings
@@ -34,6 +35,7 @@ def case(offset_s: float, *, task: str = "circle", seed: int = 0, duration: floa
     if orientation_deg is not None:
         err = err.override(orientation_rms_deg=orientation_deg)
     m = imu_model.measure(t_imu + offset_s, st.q_WB, st.wrist_acc, st.omega_B, err, 100.0, rng)
-    return SyncProblem(t_imu, models.accel_world(m["quat"], m["acc"]), m["quat"], t_f, uv, proj,
+    q = gyro_anchored(t_imu, m["quat"], m["gyr"])  # as fuse prepares it (pipeline/fuse.py)
+    return SyncProblem(t_imu, models.accel_world(q, m["acc"]), q, t_f, uv, proj,
                        models.Arm(shoulder=arm.shoulder, L1=arm.upper_arm_m, L2=arm.forearm_m,
                                   forearm_B=np.array([0.0, 1.0, 0.0])))

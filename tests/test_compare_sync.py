@@ -74,3 +74,20 @@ def test_compare_with_auto_and_with_a_wrong_declared_offset(tmp_path):
         warnings.simplefilter("always")
         pipeline.compare(s)
     assert [str(w.message) for w in seen if "not the declared -1.200 s" in str(w.message)]
+
+
+def test_an_along_ray_lag_does_not_pull_the_offset_across_the_rays():
+    """A one-camera tracker whose depth lags the motion by 80 ms (its error along the camera
+    ray only) pulls the whole-residual offset; across the rays (the camera's centre given)
+    the image pins it: recovered within 5 ms."""
+    eye = np.array([0.2, -0.6, 0.8])
+    t = np.arange(600) / 30.0
+    p, lag = _motion(t), _motion(t - 0.08)
+    u = (p - eye) / np.linalg.norm(p - eye, axis=1, keepdims=True)
+    est = p + u * np.sum((lag - p) * u, axis=1, keepdims=True)
+    truth_t = np.arange(-150, 2400) / 100.0
+    truth = _motion(truth_t + 0.2)
+    whole = estimate_offset(t, est, truth_t, truth, 100.0)
+    across = estimate_offset(t, est, truth_t, truth, 100.0, eye=eye)
+    assert abs(across.estimate_s - 0.2) < 0.005, across
+    assert abs(whole.estimate_s - 0.2) > abs(across.estimate_s - 0.2)

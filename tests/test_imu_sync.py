@@ -84,3 +84,64 @@ def test_declared_offset_wrong_by_0_2_s_warns(session):
     warn = [str(w.message) for w in seen if "clock offset" in str(w.message)]
     assert len(warn) == 1 and "\n" not in warn[0], warn
     assert re.search(r"at -0\.\d{3} ± 0\.\d{3} s, not the declared \+0\.000 s", warn[0]), warn
+
+
+def _auto_arm_copy(session: Path, dest: Path, imu_offset: str) -> Path:
+    """The session with [arm] all "auto" and the given imu_offset_s (files linked, calibrate's
+    and detect's outputs copied)."""
+    import shutil
+
+    dest.mkdir()
+    for f in session.iterdir():
+        if f.is_file() and f.name != "session.toml":
+            (dest / f.name).symlink_to(f)
+    shutil.copytree(session / "armtrack", dest / "armtrack")
+    text = re.sub(r"^imu_offset_s = .*$", f"imu_offset_s = {imu_offset}",
+                  (session / "session.toml").read_text(), flags=re.M)
+    for key in ("upper_arm_m", "forearm_m", "shoulder_m"):
+        text = re.sub(rf"^{key} = .*$", f'{key} = "auto"', text, flags=re.M)
+    (dest / "session.toml").write_text(text)
+    return dest
+
+
+def test_auto_offset_and_auto_arm_together(session, tmp_path):
+    """With the arm "auto" the offset is set again with the estimated arm's depths: "auto" is
+    found (true -0.2 s), and a declared offset 0.2 s off is checked and warned about."""
+    auto = _auto_arm_copy(session, tmp_path / "auto", '"auto"')
+    got = pipeline.fuse(auto)
+    off = got["imu_offset_s"]
+    assert off["from"] == "auto" and abs(off["value"] + 0.2) <= max(3 * off["sd"], 0.01), off
+    wrong = _auto_arm_copy(session, tmp_path / "wrong", "0")
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        got = pipeline.fuse(wrong)
+    assert "unchecked" not in got["imu_offset_s"]
+    assert any("not the declared +0.000 s" in str(w.message) for w in seen)
+
+
+@pytest.mark.parametrize("offset_s,seed", [(0.5, 0), (-0.2, 1)])
+def test_slow_circle_within_10_ms(offset_s, seed):
+    """A circle's lap (~6 s) lies where the reported orientation's wandering gravity leak
+    does; with the gyro-anchored orientation (fuse/gyro_orientation.py) the estimate is
+    within issue 14's 10 ms (it was 25 ms off with the reported orientation,
+    docs/validation-sync.md)."""
+    off = estimate_imu_offset(case(offset_s, task="circle", seed=seed))
+    assert abs(off.estimate_s - offset_s) <= 0.010
+    assert abs(off.estimate_s - offset_s) <= 3 * off.sd_s
+
+
+def test_rays_meet_the_true_sheet_where_they_graze():
+    """On a 60 s circle the camera ray grazes the arm's sphere for hundreds of frames; the
+    depths (imu_sync.wrist_on_rays) stay on the wrist's sheet at offsets a few ms either side
+    of the truth (a choice by nearness alone bounced onto the other for seconds at +12.7 ms)."""
+    from armtrack_cli.fuse.imu_sync import wrist_on_rays
+    from armtrack_cli.simulate import kinematics
+
+    p = case(0.05, task="circle", seed=0, duration=60.0)
+    s = ArmSimSettings(task="circle", duration_s=60.0)
+    arm = kinematics.ArmGeometry(np.array(s.shoulder), s.upper_arm_m, s.forearm_m)
+    true = kinematics.arm_state(arm, kinematics.Task("circle", 60.0, np.array(s.centre),
+                                                     s.size_m), p.t_frames).wrist
+    for delta in (0.04, 0.05, 0.0627):
+        err = np.linalg.norm(wrist_on_rays(p, delta) - true, axis=1)
+        assert np.mean(err > 0.05) < 0.005, delta

@@ -8,9 +8,14 @@ patch's image velocity u̇_k (a cubic Savitzky–Golay derivative of the detecti
 by c V_k(δ) + J_k d(t_k), where V_k(δ) = J_k v(t_k − δ) is the IMU's integrated world
 acceleration (eq. 4; a cubic Hermite curve through the integral, so smooth in δ) projected
 into the image and smoothed alike; c > 0 absorbs the approximate range; d is the
-integration's drift, a quartic spline with knots KNOT_S apart (the integral of a smooth
-acceleration error: ~1° of orientation error leaks up to 0.17 m/s² of gravity, varying over
-5–50 s, plus the accelerometer's bias). J_k is taken where the detection's ray meets the
+integration's drift, a quartic spline with knots KNOT_S apart, plus J_k (∫R_WB dt) β for the
+accelerometer's bias β in B (it turns with the forearm, so its drift is not smooth). The
+orientation is the gyro-anchored one (fuse/gyro_orientation.py, done by the caller): the
+reported orientation's ~1° error wanders at 0.02–0.2 Hz, and its gravity leak (up to
+0.17 m/s²) drifts the integral at the very frequencies of a slow circle's motion, which a
+spline loose enough to absorb it absorbs too (a circle's timing was lost to 25 ms); with the
+gyro, the leak is one constant, and a stiff spline keeps the motion's timing.
+J_k is taken where the detection's ray meets the
 arm's sphere (eq. 15, the IMU's orientation at t_k − δ). Cost: the fit's mean squared
 residual over the frames both cover. A grid at one frame period over the search window finds
 the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
@@ -33,22 +38,26 @@ from scipy.interpolate import CubicHermiteSpline
 
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
+    RIDGE,
     Drift,
     SplineRows,
     banded_solver,
-    fit_with_scale,
+    fit_bordered,
     normal_parts,
 )
 
 WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
-KNOT_S = 2.0  # s between the drift spline's knots: the orientation error's gravity leak
-#               varies at 0.02–0.2 Hz; the motion's timing lies mostly above
+KNOT_S = 6.0  # s between the drift spline's knots: the gyro-anchored orientation's leak is
+#               nearly constant; the motion's timing (a circle's lap: ~6 s) lies above
 DRIFT_DEGREE = 4  # quartic: the integral of a cubic spline acceleration error
 GAP_S = 0.1  # an IMU gap longer than this is missing, not interpolated across
 BRIDGE_S = 0.1  # detections lost for at most this long are bridged for the derivative
 MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be scored
 MIN_FRAMES = 30
 REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
+GRAZE_M = 0.15  # m: intersections closer than this along the ray are a grazing ray's (with 0.5 px
+#                of noise a grazing ray's two part by 10 cm from one frame to the next)
+REPREPARE = 3  # at most this many refinements, each with the depths and bias columns at its δ
 
 
 @dataclass(frozen=True)
@@ -94,6 +103,7 @@ class _Prepared:
     vel_img: np.ndarray  # (n, 2) px/s, the detections' velocity (NaN = none)
     J: np.ndarray  # (n, 2, 3) px/m
     drift: SplineRows  # (n, m) the drift's spline basis at the frames
+    rint: np.ndarray  # (M, 3, 3) s: ∫R_WB dt on the IMU's clock (a bias in B's velocity)
     v_imu: object  # t -> (…, 3) m/s, ∫ a_W dt on the IMU's clock: cubic Hermite (dv/dt = a_W)
     dt: float  # frame period, s
     window: int
@@ -107,13 +117,37 @@ def _prepare(p: SyncProblem, delta: float) -> _Prepared:
     v_imu = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (p.a_W[1:] + p.a_W[:-1])
                                                    * np.diff(p.t_imu)[:, None], axis=0)])
     return _Prepared(_savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 1, dt), J, drift,
+                     _rotation_integral(p),
                      CubicHermiteSpline(p.t_imu, v_imu, p.a_W, axis=0), dt, window)
+
+
+def _rotation_integral(p: SyncProblem) -> np.ndarray:
+    """(M, 3, 3) ∫R_WB dt from the first IMU sample (trapezoidal)."""
+    from armtrack_cli.core import quaternion as quat
+
+    R = quat.to_matrix(p.q_WB)
+    return np.concatenate([np.zeros((1, 3, 3)), np.cumsum(
+        0.5 * (R[1:] + R[:-1]) * np.diff(p.t_imu)[:, None, None], axis=0)])
+
+
+def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
+    """(n, 2, 3) px/s per m/s²: the image velocity J_k ∫R_WB β dt per unit accelerometer bias
+    β in B at t_k − δ (eq. 4: a bias in B turns with the forearm, so its velocity error is not
+    a smooth drift), smoothed as the image side is."""
+    t = np.clip(p.t_frames - delta, p.t_imu[0], p.t_imu[-1])
+    at = np.stack([np.interp(t, p.t_imu, pre.rint[:, i, j]) for i in range(3)
+                   for j in range(3)], -1).reshape(-1, 3, 3)
+    cols = np.einsum("kij,kja->kia", pre.J, at)
+    return _savgol(cols.reshape(-1, 6), pre.window, 0, pre.dt).reshape(-1, 2, 3)
 
 
 def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
     """(n, 3) m: each detection's ray where it meets the arm's sphere |p − (S + L2 R u)| = L1
     (eq. 15; the IMU's orientation at t − δ), the intersection nearer the previous frame's
-    (the first: models.initial_wrist's), the ray's nearest point where it misses; without an
+    (the first: models.initial_wrist's), where the two are within GRAZE_M of each other the
+    one nearer the table as models.initial_wrist takes it (a grazing ray's choice by nearness
+    bounced onto the other sheet for seconds from a sub-frame change of δ), the ray's nearest
+    point where it misses; without an
     arm, at the range of the first detection's start. NaN without a detection."""
     from armtrack_cli.core import quaternion as quat
 
@@ -129,9 +163,13 @@ def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
         out[det] = c + np.linalg.norm(x0 - c) * d
         return out
     near, far, _ = models.ray_sphere(c, d, p.arm.sphere_centres(q), p.arm.L1)
+    lower = np.where(near * d[:, 2] <= far * d[:, 2], near, far)  # nearer the table
     prev = np.linalg.norm(x0 - c)
     for i in range(det.size):
-        s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]
+        if far[i] - near[i] < GRAZE_M:  # a grazing ray: which one is ambiguous; the table's
+            s = lower[i]
+        else:
+            s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]
         out[det[i]] = c + s * d[i]
         prev = s
     return out
@@ -205,29 +243,33 @@ def _design(pre: _Prepared, ok: np.ndarray) -> tuple[Drift, np.ndarray]:
 
 
 def _mask(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[np.ndarray, np.ndarray]:
+    """W (n, 2, 4): the IMU's columns at δ, V(δ) and the bias's three; the frames scorable."""
     V = predicted(p, pre, delta)
-    return V, np.isfinite(V).all(axis=1) & np.isfinite(pre.vel_img).all(axis=1)
+    W = np.concatenate([V[:, :, None], _bias_columns(p, pre, delta)], axis=2)
+    return W, np.isfinite(W).all(axis=(1, 2)) & np.isfinite(pre.vel_img).all(axis=1)
 
 
 def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray | None = None):
-    """Least squares u̇_k = c V_k(δ) + J_k d(t_k), d the integrated IMU's drift (a smooth 3-D
-    function of time in the spline basis): residuals (n_ok, 2), parameter count, frames
-    used (``ok``: these frames, when given and all scorable)."""
+    """Least squares u̇_k = c V_k(δ) + J_k (∫R dt) β + J_k d(t_k), d the integrated IMU's drift
+    (a smooth 3-D function of time in the spline basis): residuals (n_ok, 2), parameter
+    count, frames used (``ok``: these frames, when given and all scorable)."""
     V, usable = _mask(p, pre, delta)
     if ok is None:
         ok = usable
     elif not usable[ok].all():
         return None, 0, ok
     D, y = _design(pre, ok)
-    return fit_with_scale(D, V[ok], y), 1 + D.used, ok
+    return fit_bordered(D, V[ok], y), V.shape[2] + D.used, ok
 
 
 def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
          frames: np.ndarray | None = None) -> float:
     """Mean squared residual of the fit (_fit); inf with too little overlap. The drift's
     normal equations are reused while the frames used stay the same (``cache``): with
-    G = DᵀD (factored once), the residual sum is yᵀy − (Dᵀy)ᵀG⁻¹Dᵀy − b² / s, where
-    s = VᵀV − (DᵀV)ᵀG⁻¹DᵀV and b = Vᵀy − (DᵀV)ᵀG⁻¹Dᵀy (the scale's column eliminated last)."""
+    G = DᵀD (banded, factored once), the residual sum is yᵀy − (Dᵀy)ᵀG⁻¹Dᵀy − bᵀS⁻¹b, where
+    S = WᵀW − (DᵀW)ᵀG⁻¹DᵀW and b = Wᵀy − (DᵀW)ᵀG⁻¹Dᵀy, W the four columns that move with δ
+    (the scale's and the bias's) eliminated last; a negative scale (c > 0: a range) leaves
+    the bias's three alone."""
     V, ok = _mask(p, pre, delta)
     if frames is not None:  # the same frames at every δ (a refinement's), when all usable
         if not ok[frames].all():
@@ -243,11 +285,15 @@ def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
         Gy = solve(Dy)
         cache.update(ok=ok, D=D, G=G, Dy=Dy, yy=yy, solve=solve, y=y, Gy=Gy,
                      base=yy - Dy @ Gy)
-    v = V[ok]
-    DV = cache["D"].t(v)
-    sv = float(np.sum(v * v) - DV @ cache["solve"](DV))
-    b = float(np.sum(v * cache["y"]) - DV @ cache["Gy"])
-    return (cache["base"] - (b * b / sv if sv > 0 and b > 0 else 0.0)) / n  # c > 0: a range
+    W = V[ok]  # (n_ok, 2, 4)
+    DW = np.stack([cache["D"].t(W[:, :, i]) for i in range(W.shape[2])], axis=1)
+    Wf = W.reshape(-1, W.shape[2])
+    S = Wf.T @ Wf - DW.T @ cache["solve"](DW) + RIDGE * np.eye(W.shape[2])
+    b = Wf.T @ cache["y"].ravel() - DW.T @ cache["Gy"]
+    theta = np.linalg.solve(S, b)
+    if theta[0] <= 0:  # c > 0: a range
+        return (cache["base"] - float(b[1:] @ np.linalg.solve(S[1:, 1:], b[1:]))) / n
+    return (cache["base"] - float(b @ theta)) / n
 
 
 def _normal_update(pre: _Prepared, cache: dict, ok: np.ndarray):
@@ -270,8 +316,6 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
                         ) -> ImuOffset | None:
     """δ minimising the cost in centre_s ± search_s, and its SD; None when no δ there gives
     enough frames with both an image and an IMU velocity."""
-    from scipy.optimize import minimize_scalar
-
     if np.isfinite(p.uv).all(axis=1).sum() < MIN_FRAMES:
         return None
     pre = _prepare(p, centre_s)
@@ -284,17 +328,33 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
     costs = np.array([cost(d, p, pre, n_img, cache) for d in grid])
     if not np.isfinite(costs).any():
         return None
-    d0 = float(grid[int(np.argmin(costs))])
-    pre = _prepare(p, d0)  # the rays' depths with the IMU's orientation at the basin
+    delta = float(grid[int(np.argmin(costs))])
+    tried = [_refine(p, pre, n_img, delta, step) + (pre,)]
+    for _ in range(REPREPARE):  # the rays' depths with the IMU's orientation at the latest δ
+        pre = _prepare(p, tried[-1][0])
+        tried.append(_refine(p, pre, n_img, tried[-1][0], step) + (pre,))
+        if abs(tried[-1][0] - tried[-2][0]) < 1e-3:
+            break
+    # where a ray grazes the sphere the depths' chain can take the other intersection from a
+    # slightly different orientation: the preparation that explains the data best is kept
+    delta, _, pre = min(tried, key=lambda x: x[1])
+    sd, frames = _sd(p, pre, delta)
+    return ImuOffset(delta, sd, frames)
+
+
+def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
+            ) -> tuple[float, float]:
+    """The cost's minimum within d0 ± REFINE_FRAMES periods, on the frames all of it scores:
+    (δ, cost)."""
+    from scipy.optimize import minimize_scalar
+
     lo, hi = d0 - REFINE_FRAMES * step, d0 + REFINE_FRAMES * step
     frames = _mask(p, pre, lo)[1] & _mask(p, pre, d0)[1] & _mask(p, pre, hi)[1]
-    cache = {}
+    cache: dict = {}
     c0 = cost(d0, p, pre, n_img, cache, frames)
     res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
                           args=(p, pre, n_img, cache, frames), options={"xatol": 1e-5})
-    delta = float(res.x) if res.fun <= c0 else d0
-    sd, frames = _sd(p, pre, delta)
-    return ImuOffset(delta, sd, frames)
+    return (float(res.x), float(res.fun)) if res.fun <= c0 else (d0, c0)
 
 
 def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:

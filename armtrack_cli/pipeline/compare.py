@@ -11,13 +11,14 @@ import pandas as pd
 from armtrack_cli.compare.errors import COLUMNS, table_one
 from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_markers
 from armtrack_cli.compare.sync import estimate_offset
-from armtrack_cli.core.errors import DataError
+from armtrack_cli.core.errors import ArmtrackError, DataError
 from armtrack_cli.core.methods import METHODS
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
 from armtrack_cli.pipeline.palm import compare_palm
+from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.tables import read_kinematics, read_trajectory
@@ -30,10 +31,11 @@ CHECK_SEARCH_S = 1.0  # a declared offset is checked within ±1 s of itself
 SYNC_PREFERENCE = ("arm-smoother", "pf-constraint", "ukf", "pf", "ekf", "inertial")  # best-tracking first
 
 
-def synchronised_truth(session: Session, trajs: dict) -> tuple[Truth, dict]:
+def synchronised_truth(session: Session, trajs: dict, *, eye=None) -> tuple[Truth, dict]:
     """The truth on the session clock, and how its offset was set: declared (and checked
     against the data: a disagreement beyond 3 SD is a one-line warning) or "auto" (estimated
-    from the trajectory of the best method in ``trajs``, method -> trajectory table)."""
+    from the trajectory of the best method in ``trajs``, method -> trajectory table; with the
+    camera's centre ``eye`` (3,) m in W, from the residual across the camera's rays)."""
     gt = session.groundtruth
     declared = session.sync.groundtruth_offset_s != "auto"
     raw = read_truth(session, offset_s=0.0)
@@ -45,7 +47,7 @@ def synchronised_truth(session: Session, trajs: dict) -> tuple[Truth, dict]:
     centre = session.offset_s("groundtruth_offset_s") if declared else 0.0
     off = None if est is None else estimate_offset(
         traj["t"].to_numpy(), est, raw.t, raw.xyz[joint], raw.rate_hz,
-        search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S, centre_s=centre)
+        search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S, centre_s=centre, eye=eye)
     if not declared:
         if off is None:
             raise DataError(gt.file, f"its clock offset cannot be estimated: within ±{AUTO_SEARCH_S:g}"
@@ -64,6 +66,15 @@ def synchronised_truth(session: Session, trajs: dict) -> tuple[Truth, dict]:
     return Truth(raw.t + centre, raw.xyz, raw.rate_hz), info
 
 
+def _camera_centre(work: Path):
+    """The camera's centre in W from calibrate's camera.yaml in the work folder (None without
+    one: the offset then weighs the whole residual)."""
+    try:
+        return read_calibrated_camera(work / "camera.yaml").centre_W
+    except ArmtrackError:  # not calibrated here (compare needs only the trajectories)
+        return None
+
+
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
             out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
@@ -75,7 +86,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
     trajs = {m: read_trajectory(work / f"trajectory-{m}.csv") for m in methods}
-    truth, offset = synchronised_truth(session, trajs)
+    truth, offset = synchronised_truth(session, trajs, eye=_camera_centre(work.path))
     rows, mrows, excluded = [], [], {}
     for_measures = denoised(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
     for m, traj in trajs.items():

@@ -17,6 +17,7 @@ from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
 from armtrack_cli.core.methods import DEFAULT_FOR_KIND, NEEDS, PALM_METHODS
 from armtrack_cli.fuse import models, robust
 from armtrack_cli.fuse.arm_smoother import ImuSamples
+from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
@@ -59,6 +60,8 @@ class Prepared:
     projection: models.Projection
     arm: models.Arm | None
     imu_offset: dict  # [sync] imu_offset_s: value, and its estimate and SD (imu_offset.py)
+    q_anchored: np.ndarray  # (M, 4) inputs.imu's orientations with their wandering error
+    #                         replaced by a constant one (fuse/gyro_orientation.py)
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
@@ -82,8 +85,9 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
                          L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
     proj = models.Projection(cam)
     known = arm if session.arm is None or not session.arm.auto else None  # "auto": not yet
-    offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_imu, a_w, t_f, uv,
-                                     proj, known)
+    q_anch = gyro_anchored(imu.t[ok], q_imu, imu.gyr[ok])
+    offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_anch,
+                                     models.accel_world(q_anch, imu.acc[ok]), t_f, uv, proj, known)
     t_imu = imu.t[ok] + offset  # session time = stream time + offset
     # frames inside the IMU's span, starting at the first detection
     inside = (t_f >= t_imu[0]) & (t_f <= t_imu[-1])
@@ -96,7 +100,7 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
                                    imu_period=1.0 / imu.rate_hz)
     inputs = Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu, t_f[frames]),
                     t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc[ok], imu.gyr[ok]))
-    return Prepared(t_f, frames, inputs, proj, arm, how)
+    return Prepared(t_f, frames, inputs, proj, arm, how, q_anch)
 
 
 def fuse(path: str | Path, *, method: str | None = None, particles: int | None = None,
@@ -114,7 +118,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     p = prepare(session, dest, s)
     auto = None
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
-        auto = arm_model.estimate(session, p)
+        auto, p = arm_model.estimate_with_offset(session, p, lambda known: prepare(known, dest, s))
         session = arm_model.with_arm(session, auto.shoulder, auto.upper_arm_m, auto.forearm_m)
         p = dataclasses.replace(p, arm=dataclasses.replace(
             p.arm, shoulder=auto.shoulder, L1=auto.upper_arm_m, L2=auto.forearm_m))

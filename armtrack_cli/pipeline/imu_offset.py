@@ -17,7 +17,8 @@ from armtrack_cli.fuse.imu_sync import SyncProblem, estimate_imu_offset
 AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
 CHECK_SEARCH_S = 0.5  # a declared offset is checked within ±0.5 s of itself
 WARN_FLOOR_S = 0.05  # … and warned about beyond 3 SD and beyond this: the estimator's own
-#                      error reaches ~30 ms on slow, smooth motion (docs/validation-sync.md)
+#                      error stays within 10 ms on the simulated tasks, but a real session's
+#                      unmodelled errors may not (docs/validation-sync.md)
 
 
 def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndarray,
@@ -30,7 +31,8 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
     declared = session.sync.imu_offset_s != "auto"
     centre = float(session.sync.imu_offset_s) if declared else 0.0
     if declared and session.arm is not None and session.arm.auto:
-        # the check takes its depths from the arm, which fuse estimates only after the offset
+        # the check takes its depths from the arm, which fuse estimates after the offset; it
+        # checks then (pipeline/arm_model.estimate_with_offset)
         return centre, {"value": centre, "from": "declared",
                         "unchecked": '[arm] is "auto": estimated after the offset'}
     problem = SyncProblem(t_imu, a_W, q_WB, t_frames, uv, proj, arm)

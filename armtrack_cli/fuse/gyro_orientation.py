@@ -1,0 +1,68 @@
+"""The IMU's orientation with its slowly varying error taken out by the gyroscope.
+
+An MTw-class sensor's reported orientation q_k = E_k q_true,k carries an error E_k of about
+1° that wanders over 5–50 s (its filter's magnetometer and accelerometer corrections), while
+its gyroscope, integrated over a session's tens of seconds, turns exactly as the sensor does
+(bias-compensated on board; the white noise's random walk is ~0.1° over 20 s). So:
+
+    G_k = G_(k−1) ⊗ exp(½ ω_(k−½) Δt_k)           the gyro's integration (q̇ = ½ q ⊗ (0, ω))
+    q_g,k = q_0 ⊗ G_k                              started at the first reported orientation
+    e_k = log(q_k ⊗ q_g,k*)                        = E_k E_0⁻¹ (a world-frame rotation vector)
+    a = mean_k e_k                                 (≈ log Ē E_0⁻¹)
+    q̂_k = exp(a) ⊗ q_g,k                          = Ē q_true,k
+
+leaves one constant error Ē (the reported error's mean over the span, a fraction of a degree)
+instead of a wandering one, whose gravity leak Ē × g is a constant acceleration: a linear
+velocity drift that any drift model absorbs without absorbing the motion. No trend is fitted
+beside a: the reported error's own slow wander would pass into it (a gyro bias, which a trend
+would model, is compensated on board in MTw-class sensors). Where the gyro is missing (NaN)
+the step turns as the reported orientation does.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armtrack_cli.core import quaternion as quat
+
+
+def _exp(v: np.ndarray) -> np.ndarray:
+    """(…, 4) unit quaternions of rotation vectors v (…, 3), rad."""
+    ang = np.linalg.norm(v, axis=-1)
+    axis = v / np.where(ang > 1e-15, ang, 1.0)[..., None]
+    return quat.from_axis_angle(axis, ang)
+
+
+def _log(q: np.ndarray) -> np.ndarray:
+    """(…, 3) rotation vectors of unit quaternions q (…, 4) (the shorter way round)."""
+    q = q * np.where(q[..., :1] < 0, -1.0, 1.0)
+    s = np.linalg.norm(q[..., 1:], axis=-1)
+    ang = 2 * np.arctan2(s, q[..., 0])
+    return q[..., 1:] * (ang / np.where(s > 1e-15, s, 1.0))[..., None]
+
+
+def integrate_gyro(t: np.ndarray, q_WB: np.ndarray, gyr_B: np.ndarray) -> np.ndarray:
+    """(M, 4) q_0 ⊗ G_k: the gyro's rates (M, 3) rad/s in B, trapezoidal over each step,
+    turning the first reported orientation q_WB[0]; a step without both rates turns as
+    the reported orientations do."""
+    w = 0.5 * (gyr_B[1:] + gyr_B[:-1]) * np.diff(t)[:, None]
+    steps = _exp(np.nan_to_num(w))
+    bad = ~np.isfinite(w).all(axis=1)
+    if bad.any():  # the reported relative turn q_(k−1)* ⊗ q_k over those steps
+        steps[bad] = quat.multiply(quat.conjugate(q_WB[:-1][bad]), q_WB[1:][bad])
+    out = np.empty_like(q_WB)
+    out[0] = quat.normalize(q_WB[0])
+    for k in range(1, t.size):  # a sequential product: M ~ 10⁴, cheap
+        out[k] = quat.multiply(out[k - 1], steps[k - 1])
+    return quat.normalize(out)
+
+
+def gyro_anchored(t: np.ndarray, q_WB: np.ndarray, gyr_B: np.ndarray | None) -> np.ndarray:
+    """(M, 4) the orientation with its wandering error replaced by one constant (module
+    docstring); t (M,) s, q_WB (M, 4) reported, gyr_B (M, 3) rad/s. Without a gyroscope (None
+    or all NaN) the reported orientation, unchanged."""
+    if gyr_B is None or t.size < 3 or not np.isfinite(gyr_B).any():
+        return q_WB
+    q_g = integrate_gyro(t, q_WB, gyr_B)
+    e = _log(quat.multiply(quat.normalize(q_WB), quat.conjugate(q_g)))
+    return quat.normalize(quat.multiply(_exp(e.mean(axis=0)), q_g))
