@@ -13,7 +13,6 @@ orientation.
 from __future__ import annotations
 
 import argparse
-import re
 import shutil
 import sys
 import tempfile
@@ -29,6 +28,7 @@ from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.core.errors import ArmtrackError  # noqa: E402
 from armtrack_cli.session.arm_file import read_arm_estimate  # noqa: E402
 from armtrack_cli.simulate.arm_session import ArmSimSettings  # noqa: E402
+from validation.from_mocap import as_auto  # noqa: E402
 
 TASKS = ("circle", "rectangle", "reach", "figure8")
 METHODS = ("arm-smoother", "pf-constraint")
@@ -42,17 +42,9 @@ def _wrist(folder: Path, out: Path, method: str) -> float:
 
 
 def _auto_copy(folder: Path) -> Path:
-    """The session with its [arm] all "auto" (files linked; calibrate's and detect's outputs
-    copied with their times, so they are not redone)."""
-    dest = folder.parent / f"{folder.name}-auto"
-    dest.mkdir()
-    for f in folder.iterdir():
-        if f.is_file() and f.name != "session.toml":
-            (dest / f.name).symlink_to(f.resolve())
-    text = (folder / "session.toml").read_text()
-    for key in ("upper_arm_m", "forearm_m", "shoulder_m"):
-        text = re.sub(rf"^{key} = .*$", f'{key} = "auto"', text, flags=re.M)
-    (dest / "session.toml").write_text(text)
+    """The session with its [arm] all "auto" (validation/from_mocap.as_auto), calibrate's and
+    detect's outputs copied with their times, so they are not redone."""
+    dest = as_auto(folder, folder.parent / f"{folder.name}-auto")
     shutil.copytree(folder / "armtrack", dest / "armtrack")
     return dest
 
