@@ -77,3 +77,17 @@ def test_vectorised_over_leading_axes():
     R = Q.to_matrix(q)
     assert R.shape == (5, 7, 3, 3)
     np.testing.assert_allclose(Q.rotate(q, v), np.einsum("abij,abj->abi", R, v))
+
+
+def test_rotation_vector_maps_are_the_axis_angle_closed_form():
+    """to_rotvec(from_axis_angle(u, a)) = a·u for a in [0, π); from_rotvec inverts it, and a
+    quaternion's sign does not change its rotation vector."""
+    rng = np.random.default_rng(3)
+    u = rng.normal(size=(50, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    a = rng.uniform(0, np.pi - 1e-6, 50)
+    a[:3] = [0.0, 1e-12, 1e-7]
+    q = Q.from_axis_angle(u, a)
+    np.testing.assert_allclose(Q.to_rotvec(q), a[:, None] * u, atol=1e-12)
+    np.testing.assert_allclose(Q.to_rotvec(-q), a[:, None] * u, atol=1e-12)
+    np.testing.assert_allclose(Q.from_rotvec(a[:, None] * u), q, atol=1e-12)

@@ -104,6 +104,22 @@ def from_axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
 
 
+def from_rotvec(v: np.ndarray) -> np.ndarray:
+    """Unit quaternions (..., 4) of rotation vectors v (..., 3), rad (the exponential map)."""
+    v = np.asarray(v, dtype=float)
+    ang = np.linalg.norm(v, axis=-1)
+    return from_axis_angle(v / np.where(ang > 1e-15, ang, 1.0)[..., None], ang)
+
+
+def to_rotvec(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors (..., 3) of unit quaternions (..., 4), angle in [0, π] (the shorter way
+    round; the logarithm map)."""
+    q = np.asarray(q, dtype=float)
+    q = q * np.where(q[..., :1] < 0, -1.0, 1.0)
+    s = np.linalg.norm(q[..., 1:], axis=-1)
+    return q[..., 1:] * (2 * np.arctan2(s, q[..., 0]) / np.where(s > 1e-15, s, 1.0))[..., None]
+
+
 def angle_between(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Rotation angle (rad) of p* ⊗ q, in [0, π]."""
     d = np.abs(np.sum(normalize(p) * normalize(q), axis=-1))

@@ -26,28 +26,18 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 
 
-def _exp(v: np.ndarray) -> np.ndarray:
-    """(…, 4) unit quaternions of rotation vectors v (…, 3), rad."""
-    ang = np.linalg.norm(v, axis=-1)
-    axis = v / np.where(ang > 1e-15, ang, 1.0)[..., None]
-    return quat.from_axis_angle(axis, ang)
-
-
-def _log(q: np.ndarray) -> np.ndarray:
-    """(…, 3) rotation vectors of unit quaternions q (…, 4) (the shorter way round)."""
-    q = q * np.where(q[..., :1] < 0, -1.0, 1.0)
-    s = np.linalg.norm(q[..., 1:], axis=-1)
-    ang = 2 * np.arctan2(s, q[..., 0])
-    return q[..., 1:] * (ang / np.where(s > 1e-15, s, 1.0))[..., None]
+def gyro_steps(t: np.ndarray, gyr_B: np.ndarray) -> np.ndarray:
+    """(M − 1, 4) the body's rotation over each IMU interval from the gyro's rates (M, 3)
+    rad/s in B at t (M,) s, trapezoidal (q̇ = ½ q ⊗ (0, ω)); NaN where a rate is missing."""
+    return quat.from_rotvec(0.5 * (gyr_B[1:] + gyr_B[:-1]) * np.diff(t)[:, None])
 
 
 def integrate_gyro(t: np.ndarray, q_WB: np.ndarray, gyr_B: np.ndarray) -> np.ndarray:
     """(M, 4) q_0 ⊗ G_k: the gyro's rates (M, 3) rad/s in B, trapezoidal over each step,
     turning the first reported orientation q_WB[0]; a step without both rates turns as
     the reported orientations do."""
-    w = 0.5 * (gyr_B[1:] + gyr_B[:-1]) * np.diff(t)[:, None]
-    steps = _exp(np.nan_to_num(w))
-    bad = ~np.isfinite(w).all(axis=1)
+    steps = gyro_steps(t, gyr_B)
+    bad = ~np.isfinite(steps).all(axis=1)
     if bad.any():  # the reported relative turn q_(k−1)* ⊗ q_k over those steps
         steps[bad] = quat.multiply(quat.conjugate(q_WB[:-1][bad]), q_WB[1:][bad])
     out = np.empty_like(q_WB)
@@ -64,5 +54,5 @@ def gyro_anchored(t: np.ndarray, q_WB: np.ndarray, gyr_B: np.ndarray | None) -> 
     if gyr_B is None or t.size < 3 or not np.isfinite(gyr_B).any():
         return q_WB
     q_g = integrate_gyro(t, q_WB, gyr_B)
-    e = _log(quat.multiply(quat.normalize(q_WB), quat.conjugate(q_g)))
-    return quat.normalize(quat.multiply(_exp(e.mean(axis=0)), q_g))
+    e = quat.to_rotvec(quat.multiply(quat.normalize(q_WB), quat.conjugate(q_g)))
+    return quat.normalize(quat.multiply(quat.from_rotvec(e.mean(axis=0)), q_g))

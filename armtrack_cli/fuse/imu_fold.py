@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
+from armtrack_cli.fuse.gyro_orientation import gyro_steps
 from armtrack_cli.fuse.models import GRAVITY_W
 from armtrack_cli.fuse.settings import HOLDS
 
@@ -115,13 +116,6 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
                   acc_p[:, :, 4:7], acc_v[:, :, 4:7])
 
 
-def _rotvec(q: np.ndarray) -> np.ndarray:
-    """Rotation vectors (M, 3) of unit quaternions (M, 4) (w first), angle in [0, π]."""
-    q = q * np.where(q[:, :1] < 0, -1.0, 1.0)
-    s = np.linalg.norm(q[:, 1:], axis=1)
-    return (2 * np.arctan2(s, q[:, 0]) / np.maximum(s, 1e-300))[:, None] * q[:, 1:]
-
-
 def _at(t_src: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:
     """y (M, ...) linearly interpolated at times t (inside t_src)."""
     i = np.clip(np.searchsorted(t_src, t, side="right"), 1, t_src.size - 1)
@@ -129,19 +123,22 @@ def _at(t_src: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:
     return y[i - 1] * (1 - f) + y[i] * f
 
 
+def rotation_integral(t_imu: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
+    """(M, 3, 3) s: ∫R_WB dt from the first IMU sample (trapezoidal), what a constant vector
+    in B (a bias) integrates to in W."""
+    R = quat.to_matrix(q_WB)
+    return np.concatenate([np.zeros((1, 3, 3)), np.cumsum(
+        0.5 * (R[1:] + R[:-1]) * np.diff(t_imu)[:, None, None], axis=0)])
+
+
 def orientation_track(t_imu: np.ndarray, q_WB: np.ndarray, w_B: np.ndarray,
                       t_frames: np.ndarray) -> OrientationTrack:
     """The orientation error's change between frames t_frames (n,) from the IMU's output
     orientation q_WB (M, 4) and gyro w_B (M, 3) rad/s at t_imu (M,) s (module docstring)."""
-    dt = np.diff(t_imu)
-    w = 0.5 * (w_B[1:] + w_B[:-1]) * dt[:, None]  # the body's rotation over each interval
-    ang = np.linalg.norm(w, axis=1)
-    dq = quat.from_axis_angle(w / np.maximum(ang, 1e-300)[:, None], ang)
+    dq = gyro_steps(t_imu, w_B)  # the body's rotation over each interval
     D = quat.multiply(quat.multiply(q_WB[1:], quat.conjugate(dq)), quat.conjugate(q_WB[:-1]))
-    R = quat.to_matrix(q_WB)
-    cum = np.concatenate([np.zeros((1, 3)), np.cumsum(_rotvec(D), axis=0)])
-    cum_G = np.concatenate([np.zeros((1, 3, 3)),
-                            np.cumsum(0.5 * (R[1:] + R[:-1]) * dt[:, None, None], axis=0)])
+    cum = np.concatenate([np.zeros((1, 3)), np.cumsum(quat.to_rotvec(D), axis=0)])
+    cum_G = rotation_integral(t_imu, q_WB)
     c, G = _at(t_imu, cum, t_frames), _at(t_imu, cum_G, t_frames)
     return OrientationTrack(np.concatenate([np.zeros((1, 3)), np.diff(c, axis=0)]),
                             np.concatenate([np.zeros((1, 3, 3)), np.diff(G, axis=0)]))

@@ -45,6 +45,7 @@ from armtrack_cli.fuse.drift_ls import (
     fit_bordered,
     normal_parts,
 )
+from armtrack_cli.fuse.imu_fold import rotation_integral
 
 WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
 KNOT_S = 6.0  # s between the drift spline's knots: the gyro-anchored orientation's leak is
@@ -117,17 +118,8 @@ def _prepare(p: SyncProblem, delta: float) -> _Prepared:
     v_imu = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (p.a_W[1:] + p.a_W[:-1])
                                                    * np.diff(p.t_imu)[:, None], axis=0)])
     return _Prepared(_savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 1, dt), J, drift,
-                     _rotation_integral(p),
+                     rotation_integral(p.t_imu, p.q_WB),
                      CubicHermiteSpline(p.t_imu, v_imu, p.a_W, axis=0), dt, window)
-
-
-def _rotation_integral(p: SyncProblem) -> np.ndarray:
-    """(M, 3, 3) ∫R_WB dt from the first IMU sample (trapezoidal)."""
-    from armtrack_cli.core import quaternion as quat
-
-    R = quat.to_matrix(p.q_WB)
-    return np.concatenate([np.zeros((1, 3, 3)), np.cumsum(
-        0.5 * (R[1:] + R[:-1]) * np.diff(p.t_imu)[:, None, None], axis=0)])
 
 
 def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
