@@ -152,7 +152,7 @@ READING = (
     "follows the "
     "shoulder: the smoother's wrist lies on the estimated sphere, so the shoulder's error "
     "along the camera's line of sight becomes the wrist's, and the wrist goal (within 20 % "
-    "of the declared arm's 0.6 cm) would need the shoulder to a few mm. The lengths' SDs "
+    "of the declared arm's 0.1-0.4 cm) would need the shoulder to a few mm. The lengths' SDs "
     "(3-5 cm for L1) say the data hardly fix them: the estimates sit near the weak "
     "anthropometric prior (fuse/arm_auto.py: 0.30 and 0.26 m, SD 5 cm), which is 1 cm from "
     "the simulator's arm (0.31, 0.27 m), so the length errors are the prior's, and their "
