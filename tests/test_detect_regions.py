@@ -42,6 +42,19 @@ def test_regions_are_the_whole_mask_components(seed):
     assert r.label_at(-1, -1) == 0 and r.label_at(m.shape[1] + 3, 0) == 0
 
 
+def _random_hsv(rng, shape):
+    """An HSV frame of uniform noise in every channel."""
+    return np.dstack([rng.integers(0, 180, shape), rng.integers(0, 256, shape),
+                      rng.integers(0, 256, shape)]).astype(np.uint8)
+
+
+def _plain_and_blobs(hsv, seed):
+    """A plain background of hsv's shape, and the mask of seed's blobs on it."""
+    plain = np.zeros_like(hsv)
+    plain[...] = (90, 30, 30)
+    return plain, _blobs(seed, hsv.shape[:2]) > 0
+
+
 @pytest.mark.parametrize("low,high", [((0, 140, 90), (12, 255, 255)),
                                       ((170, 140, 90), (10, 255, 255)),
                                       ((100, 60, 40), (130, 200, 255))])
@@ -50,12 +63,9 @@ def test_patch_mask_is_the_masked_back_projection(low, high, seed):
     """Noise everywhere (seed 0), or a few patches and speckle on a plain background, some at
     the image's edges (the opening is done on their box only)."""
     rng = np.random.default_rng(seed)
-    hsv = np.dstack([rng.integers(0, 180, (120, 160)), rng.integers(0, 256, (120, 160)),
-                     rng.integers(0, 256, (120, 160))]).astype(np.uint8)
+    hsv = _random_hsv(rng, (120, 160))
     if seed:
-        plain = np.zeros_like(hsv)
-        plain[...] = (90, 30, 30)
-        keep = _blobs(seed, (120, 160)) > 0
+        plain, keep = _plain_and_blobs(hsv, seed)
         plain[keep] = hsv[keep]
         hsv = plain
     hsv[40:70, 50:90] = (low[0], 200, 200)  # a patch
@@ -83,12 +93,9 @@ def test_sparse_patch_mask_is_the_patch_mask(low, high, seed):
     frame: noise everywhere (seed 0), or blobs of every size (down to single pixels and thin
     lines, at odd and even offsets, on the edges) in and out of the range."""
     rng = np.random.default_rng(seed)
-    hsv = np.dstack([rng.integers(0, 180, (121, 163)), rng.integers(0, 256, (121, 163)),
-                     rng.integers(0, 256, (121, 163))]).astype(np.uint8)
+    hsv = _random_hsv(rng, (121, 163))
     if seed:
-        plain = np.zeros_like(hsv)
-        plain[...] = (90, 30, 30)
-        keep = _blobs(seed, (121, 163)) > 0
+        plain, keep = _plain_and_blobs(hsv, seed)
         plain[keep] = (low[0], 200, 200) if seed % 2 else hsv[keep]
         plain[rng.integers(0, 121), 5:150] = (low[0], 200, 200)  # a 1-px line
         plain[10:13, 20:23 + seed] = (high[0], 200, 200)  # a 3-px-high bar

@@ -15,7 +15,6 @@ from armtrack_cli.fuse.drift_ls import (
     SplineRows,
     banded_solver,
     fit_bordered,
-    fit_with_scale,
     normal_parts,
 )
 
@@ -57,7 +56,7 @@ def test_fit_with_scale_is_the_least_squares_residual():
     rows, J, v, y, dense, m = _problem()
     X = np.hstack([v.reshape(-1, 1), dense])
     theta, *_ = np.linalg.lstsq(X, y.ravel(), rcond=None)
-    r = fit_with_scale(Drift(rows, J), v, y)
+    r = fit_bordered(Drift(rows, J), v[:, :, None], y)  # the scale's one column
     assert np.allclose(r.ravel(), y.ravel() - X @ theta, atol=1e-7)
     E = np.random.default_rng(5).normal(0, 1, (v.shape[0], 2, 3))  # three dense columns
     X = np.hstack([E.reshape(-1, 3), dense])

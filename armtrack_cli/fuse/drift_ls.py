@@ -114,8 +114,3 @@ def fit_bordered(D: Drift, E: np.ndarray, y: np.ndarray) -> np.ndarray:
     S = Ef.T @ Ef + RIDGE * np.eye(E.shape[2]) - DE.T @ GE
     gamma = np.linalg.solve(S, Ef.T @ y.ravel() - DE.T @ Gy)
     return y - np.einsum("kic,c->ki", E, gamma) - D.times(Gy - GE @ gamma)
-
-
-def fit_with_scale(D: Drift, v: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """fit_bordered with one dense column, the scale c of v (n, 2): y ≈ c v + D θ."""
-    return fit_bordered(D, v[:, :, None], y)
