@@ -234,8 +234,8 @@ class PatchTracker:
 
     # --- acquiring
     def _acquire(self, i: int, bgr: np.ndarray) -> None:
-        if not self.tracklets:
-            self._episode = i  # the first frame of this acquisition
+        if self.last[2] >= self._episode:  # the first frame of this acquisition (the patch
+            self._episode = i  # was seen since the last one began)
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
         if self._hsv is None or self._hsv.shape != bgr.shape:
             self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
@@ -333,7 +333,7 @@ class PatchTracker:
         latest that ended before the head began, within relink_s and _reach_px of where the
         head began, having looked like the patch (the patch seen at rest for a while, then
         crossed by the other arm, then seen again where it was: each stretch is the patch)."""
-        chain = [t]
+        chain, seen = [t], self.last[2] >= 0  # before the patch was ever seen, none was lost
         while True:
             h = chain[-1]
             u, v = h.rects[0][:2]
@@ -341,8 +341,8 @@ class PatchTracker:
                     and d.frames[-1] < h.frames[0]
                     and (h.frames[0] - d.frames[-1]) / self.fps <= self.s.relink_s
                     and np.hypot(d.rects[-1][0] - u, d.rects[-1][1] - v) <= self._reach_px(
-                        h.frames[0] - d.frames[-1],
-                        d.frames[0] == self._episode and d.good[0])]
+                        h.frames[0] - d.frames[-1], seen and d.frames[0] == self._episode
+                        and d.good[0])]
             if not prev:
                 return chain[::-1]
             chain.append(max(prev, key=lambda d: d.frames[-1]))
