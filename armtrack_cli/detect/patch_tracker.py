@@ -20,7 +20,6 @@ nothing ever moves, the largest region of the first frame is the patch.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from statistics import median
 
 import cv2
 import numpy as np
