@@ -8,13 +8,16 @@ not the image. The window is accepted when its region looks like the patch did
 sub-pixel centroid is reported.
 
 Acquiring (the first frames, and whenever the check fails): the whole frame (its mask guided
-by a half-resolution pass). Every region is followed by its own CamShift window (a
-tracklet), each frame marked by whether it looks like the patch. A tracklet that looks like
-the patch now is taken as the patch when it moves (the patch moves with the arm: a same-hue
-cup on the table never does), or when it appears close to where and soon after the patch was
-lost (it came back at rest). Because detect runs offline, its earlier frames that looked like
-the patch are then reported too. Until then frames are ``ok = 0`` with no position. If
-nothing ever moves, the largest region of the first frame is the patch.
+by a half-resolution pass). Every region is followed as a tracklet (frame to frame, to the
+region nearest where it was heading), each frame marked by whether it looks like the patch. A
+tracklet that looks like the patch now is taken as the patch when it moves (the patch moves
+with the arm: a same-hue cup on the table never does), or when it appears soon after the
+patch was lost, no farther from where it went than the arm can have carried it in the time
+(it came back at rest, after a card). Because detect runs offline, its earlier frames that
+looked like the patch are then reported too, and so are those of the tracklets that lead to
+it (the patch at rest, crossed by the other arm, seen again where it was: one tracklet per
+stretch in view). Until then frames are ``ok = 0`` with no position. If nothing ever moves,
+the largest region of the first frame is the patch.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ TRACK_MASS_STEP = 1.5  # a tracklet's region changing mass by more than this in 
 @dataclass(frozen=True)
 class PatchSettings:
     min_area_px: int = 25  # smallest region taken as a candidate
-    max_jump_px: float = 60.0  # a window moving farther in one frame is a new tracklet
+    max_jump_px: float = 60.0  # a window (a tracklet's region) moving farther in a frame: lost
     lost_fraction: float = 0.7  # region mass below this share of what its trend predicts: lost
     max_growth: float = 1.3  # … above this share: something else joined it: lost
     max_aspect: float = 3.0  # a window longer than this times its width is not the patch
