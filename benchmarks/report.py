@@ -28,7 +28,8 @@ def detection_lines(res: dict) -> list[str]:
          "`detect` decodes on a second thread while it detects, so on an idle machine it "
          "cannot beat the slower of *decode only (CPU)* and *detector alone (CPU)*, and on a "
          f"busy one it needs their sum. Load average (1 min) {load[0]:.1f} when these rows "
-         f"began, {load[1]:.1f} when they ended.", "",
+         f"began, {load[1]:.1f} when they ended. `python benchmarks/run.py --detection` reruns "
+         "this section alone.", "",
          "| what | frames | seconds | frames/s | × decode-only time | goal | |",
          "|---|---|---|---|---|---|---|"]
     for what, n, sec, dec, goal in res["detect"]:
