@@ -145,20 +145,22 @@ def test_linearised_rows_match_finite_differences(drifting):
     proj = _camera()
     arm = models.Arm(shoulder=np.array([0.0, 0.3, 0.35]), L1=0.3, L2=0.28,
                      forearm_B=np.array([1.0, 0, 0]))
-    n, d = 4, 15 if drifting else 12
+    n, d = 4, 16 if drifting else 12  # drifting: (ℓ, S) at 12:16
     X = np.zeros((n, d))
     X[:, :3] = [0.25, 0.2, 0.1] + 0.03 * rng.standard_normal((n, 3))
     X[:, 6:9] = 0.01 * rng.standard_normal((n, 3))
     if drifting:
-        X[:, 12:15] = arm.shoulder + 0.01 * rng.standard_normal((n, 3))
+        X[:, 13:16] = arm.shoulder + 0.01 * rng.standard_normal((n, 3))
     q = quat.normalize(rng.standard_normal((n, 4)))
+    if drifting:
+        X[:, 12] = 0.02 * rng.standard_normal(n)  # ℓ, the upper arm's length change
     z = proj(X[:, :3]) + 1.0
     Hc, zc, Hk, zk = arm_smoother.linearise(X, z, q, proj, arm, None if drifting else arm.shoulder)
 
     def residuals(Y):
         u = arm_smoother.forearm(q, Y[:, 6:9], arm)
-        S = Y[:, 12:15] if drifting else arm.shoulder
-        return proj(Y[:, :3]), np.linalg.norm(Y[:, :3] - arm.L2 * u - S, axis=1) - arm.L1
+        S, ell = (Y[:, 13:16], Y[:, 12]) if drifting else (arm.shoulder, 0.0)
+        return proj(Y[:, :3]), np.linalg.norm(Y[:, :3] - arm.L2 * u - S, axis=1) - arm.L1 - ell
 
     h0, r0 = residuals(X)
     assert np.abs(zc - (z - h0 + np.einsum("kij,kj->ki", Hc, X))).max() < 1e-9
@@ -173,9 +175,11 @@ def test_linearised_rows_match_finite_differences(drifting):
 
 def test_process_is_gauss_markov_with_the_stated_spread():
     """δθ's stationary SD is orientation_sd_deg (tilt) and heading_sd_deg (about z) whatever
-    the frame interval; the shoulder's likewise, about the declared shoulder."""
+    the frame interval; the drifting arm's (ℓ, S) are random walks: unchanged in the mean,
+    their variance grown by rate² × dt, starting at the declared arm with the stated SDs."""
     s = FuseSettings(orientation_sd_deg=0.8, heading_sd_deg=1.2, orientation_tau_s=1.5,
-                     shoulder_sd_m=0.02)
+                     shoulder_sd_m=0.02, shoulder_walk_m_s=0.01, upper_arm_sd_m=0.03,
+                     upper_arm_walk_m_s=0.02)
     t, q, f = _imu(np.random.default_rng(6))
     fd = imu_fold.fold(t, q, f, np.arange(0.1, 2.9, 1 / 30))
     S0 = np.array([0.1, 0.2, 0.3])
@@ -184,9 +188,15 @@ def test_process_is_gauss_markov_with_the_stated_spread():
     k = 5
     assert np.allclose(F[k, 6:9, 6:9] @ var @ F[k, 6:9, 6:9].T + Q[k, 6:9, 6:9], var,
                        rtol=1e-12, atol=0)
-    assert np.allclose(F[k, 12:15, 12:15] @ S0 + b[k, 12:15], S0, rtol=1e-12)
-    assert np.allclose(F[k, 12:15, 12:15] @ (4e-4 * np.eye(3)) @ F[k, 12:15, 12:15].T
-                       + Q[k, 12:15, 12:15], 4e-4 * np.eye(3), rtol=1e-12)
+    x = np.r_[np.zeros(12), 0.01, S0]
+    assert F.shape[1:] == (16, 16)
+    assert np.allclose((F[k] @ x + b[k])[12:], x[12:], rtol=1e-12)
+    dt = fd.dt[k]
+    assert np.allclose(Q[k, 12:, 12:], np.diag([0.02**2] + [0.01**2] * 3) * dt, rtol=1e-12)
+    assert np.allclose(Q[k, 12:, :12], 0.0)
+    m, P = arm_smoother.prior(np.zeros(6), np.eye(6) * 1e-4, s, S0)
+    assert np.allclose(m[12:], x[12:] - [0.01, 0, 0, 0])
+    assert np.allclose(np.diag(P)[12:], [0.03**2] + [0.02**2] * 3)
 
 
 def _turning(t, bias):
