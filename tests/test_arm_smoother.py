@@ -249,3 +249,24 @@ def test_without_a_gyro_the_orientation_error_is_gauss_markov():
                                   np.tile([0, 0, 9.81], (t.size, 1)), np.full((t.size, 3), np.nan))
     assert not imu.gyro()
     assert arm_smoother.ImuSamples(t, imu.q_WB, imu.f_B, np.zeros((t.size, 3))).gyro()
+
+
+def test_pre_roll_reaches_back_over_the_imu_recorded_before_the_video():
+    """With the rest update on, the smoother starts where the IMU starts (at most pre_roll_s
+    before the first frame), at the video's rate, with no detections and the first pass's
+    start at rest; with it off, nothing is added."""
+    t = np.arange(-0.5, 3.0, 0.01)
+    q = np.tile([1.0, 0, 0, 0], (t.size, 1))
+    imu = arm_smoother.ImuSamples(t, q, np.tile([0, 0, 9.81], (t.size, 1)), np.zeros((t.size, 3)))
+    tf = np.arange(0, 2, 1 / 30)
+    z = np.full((tf.size, 2), 100.0)
+    first = np.tile([0.1, 0.2, 0.3, 0.01, 0.02, 0.03], (tf.size, 1))
+    on = FuseSettings(rest_velocity_sd_m_s=0.01, pre_roll_s=1.0)
+    m, t2, z2, q2, first2 = arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, on)
+    assert m == 15  # 0.5 s of IMU before the video, at 30 frames/s
+    np.testing.assert_allclose(t2[:m], -0.5 + np.arange(15) / 30, atol=1e-12)
+    assert np.isnan(z2[:m]).all() and np.array_equal(z2[m:], z) and np.isfinite(q2).all()
+    np.testing.assert_allclose(first2[:m], [[0.1, 0.2, 0.3, 0, 0, 0]] * m)
+    short = FuseSettings(rest_velocity_sd_m_s=0.01, pre_roll_s=0.2)
+    assert arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, short)[0] == 6
+    assert arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, FuseSettings())[0] == 0

@@ -75,3 +75,17 @@ def _batch_with_velocity(prob, still, sd):
             info[k * d + a, k * d + a] += 1 / sd**2  # row e_a, target 0
     cov2 = np.linalg.inv(info)
     return (cov2 @ vec).reshape(n, d), cov2
+
+
+def test_before_the_video_the_imu_alone_decides():
+    """Steps before the first frame (the IMU recorded before the video) have no patch: rest
+    there is the IMU's test alone, over a window twice as long; from the video on, the
+    patch's window is the video's."""
+    t, f, w, tf, z = _stream(np.random.default_rng(1))
+    z2 = z.copy()
+    z2[:12] = np.nan  # the video starts at frame 12, t = 0.4 s
+    found = rest.rest_frames(t, f, w, tf, z2, rest.RestTest(window_s=0.3), video_from=12)
+    imu_only = (tf - 0.3 >= 0) & (tf + 0.3 < 1.02)
+    on_video = (tf - 0.15 >= tf[12] - 1e-9) & (tf + 0.15 < 1.02)
+    assert found[:12].any() and np.array_equal(found[:12], imu_only[:12])
+    assert np.array_equal(found[12:], on_video[12:])

@@ -202,13 +202,29 @@ def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
     return m, P
 
 
-def resting(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, s: FuseSettings
-            ) -> np.ndarray:
+def resting(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, s: FuseSettings,
+            video_from: int = 0) -> np.ndarray:
     """(n,) bool: frames given a zero velocity (fuse/rest.py); none when rest_velocity_sd_m_s
-    is 0 or the IMU file has no gyroscope."""
+    is 0 or the IMU file has no gyroscope. Frames before ``video_from``: the IMU's alone."""
     if s.rest_velocity_sd_m_s <= 0 or not imu.gyro():
         return np.zeros(t_frames.size, bool)
-    return rest.rest_frames(imu.t, imu.f_B, imu.w_B, t_frames, z)
+    return rest.rest_frames(imu.t, imu.f_B, imu.w_B, t_frames, z, video_from=video_from)
+
+
+def pre_roll(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
+             first: np.ndarray, s: FuseSettings):
+    """Steps at the video's rate before its first frame, back over the IMU recorded before it
+    (at most pre_roll_s; none when the rest update is off, the only thing that gives them
+    weight): their times, no detections, the IMU orientation, the first pass's start at rest.
+    A trial that starts moving leaves its first frame's velocity to the IMU's integral from
+    a hand at rest, instead of a 5 cm/s prior the camera cannot correct along its ray."""
+    dt = float(np.median(np.diff(t_frames)))
+    span = min(s.pre_roll_s, t_frames[0] - imu.t[0]) if s.rest_velocity_sd_m_s > 0 else 0.0
+    m = int(np.floor(span / dt + 1e-9))
+    tp = t_frames[0] - dt * np.arange(m, 0, -1)
+    fp = np.tile(np.r_[first[0, :3], 0.0, 0.0, 0.0], (m, 1))
+    return (m, np.r_[tp, t_frames], np.vstack([np.full((m, 2), np.nan), z]),
+            np.vstack([quat.interpolate(imu.t, imu.q_WB, tp), q_hat]), np.vstack([fp, first]))
 
 
 def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
@@ -217,6 +233,7 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     """Smooth the session: frames at t_frames (n,) s with detections z (n, 2) px (NaN = none),
     the IMU orientation q_hat (n, 4) at each frame, ``first`` (n, 6) the first pass's (p, v)."""
     shoulder = np.asarray(arm.shoulder, float) if s.shoulder == "drifting" else None
+    m_pre, t_frames, z, q_hat, first = pre_roll(imu, t_frames, z, q_hat, first, s)
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
     period = float(np.median(np.diff(imu.t)))
     gyro = s.orientation_model == "gyro" and imu.gyro()
@@ -230,7 +247,7 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
     rc, rk = s.pixel_sigma**2, s.constraint_sigma_m**2
-    still = resting(imu, t_frames, z, s)
+    still = resting(imu, t_frames, z, s, m_pre)
     iterations, step = 0, np.inf
     while iterations < s.smoother_iterations and step >= STEP_TOL_M:
         Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm,
@@ -244,6 +261,7 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
             Xn, P, gated = Xn[ins.real], P[ins.real], gated[ins.real]
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
         X, iterations = Xn, iterations + 1
+    X, P, gated, q_hat = X[m_pre:], P[m_pre:], gated[m_pre:], q_hat[m_pre:]  # the video's
     u = forearm(q_hat, X[:, TH], arm)
     J = np.zeros((X.shape[0], 3, X.shape[1]))  # ∂E/∂x, E = p − L2 u(δθ) (eq. 2)
     J[:, :, P_] = np.eye(3)

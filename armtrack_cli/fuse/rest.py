@@ -49,18 +49,23 @@ def _window_all(t: np.ndarray, ok: np.ndarray, centres: np.ndarray, half: float)
 
 
 def rest_frames(t_imu: np.ndarray, f_B: np.ndarray, w_B: np.ndarray, t_frames: np.ndarray,
-                z: np.ndarray, test: RestTest = RestTest()) -> np.ndarray:
+                z: np.ndarray, test: RestTest = RestTest(), video_from: int = 0) -> np.ndarray:
     """(n,) bool: frames at which the hand rests — IMU (t_imu (M,) s, f_B, w_B (M, 3)) quiet
-    and the patch (z (n, 2) px, NaN where not reported) seen and still over the window."""
+    and the patch (z (n, 2) px, NaN where not reported) seen and still over the window.
+    Frames before ``video_from`` (the IMU before the video started) have the IMU test only,
+    with a window twice as long."""
     half = test.window_s / 2
     quiet = ((np.linalg.norm(w_B, axis=1) < test.gyro_rad_s)
              & (np.abs(np.linalg.norm(f_B, axis=1) - G) < test.accel_m_s2))
     rest = _window_all(t_imu, quiet, t_frames, half)
-    seen = np.isfinite(z).all(axis=1)
-    rest &= _window_all(t_frames, seen, t_frames, half)
-    for k in np.flatnonzero(rest):
-        near = np.abs(t_frames - t_frames[k]) <= half
-        rest[k] = bool((np.ptp(z[near], axis=0) < test.px).all())
+    rest[:video_from] = _window_all(t_imu, quiet, t_frames[:video_from], 2 * half)
+    tv, zv = t_frames[video_from:], z[video_from:]
+    seen = np.isfinite(zv).all(axis=1)
+    on_video = rest[video_from:] & _window_all(tv, seen, tv, half)
+    for k in np.flatnonzero(on_video):
+        near = np.abs(tv - tv[k]) <= half
+        on_video[k] = bool((np.ptp(zv[near], axis=0) < test.px).all())
+    rest[video_from:] = on_video
     return rest
 
 
