@@ -255,6 +255,6 @@ def test_a_drifting_arm_lets_go_of_a_wrongly_declared_shoulder(mocap_session, tm
     drifting, meta = _wrist_rmse_cm(wrong, "fuse.shoulder=drifting",
                                     "fuse.rest_velocity_sd_m_s=0.01")
     assert fixed > 2.0, fixed  # the wrong sphere costs centimetres …
-    assert drifting < 0.5 * fixed, (drifting, fixed)  # … which the drifting arm gives back
-    moved = np.linalg.norm(np.array(meta["shoulder_mean_m"]) - true_sh)
-    assert moved < 0.5 * 0.06, meta["shoulder_mean_m"]
+    assert drifting < 1.0, (drifting, fixed)  # … which the drifting arm gives back (0.6 cm)
+    off = np.linalg.norm(np.array(meta["shoulder_mean_m"]) - true_sh)
+    assert off < 0.025, meta["shoulder_mean_m"]  # 6 cm off declared, under 2.5 cm estimated
