@@ -234,8 +234,8 @@ def write(out: Path, mocap: list[str], synthetic: list[str], smoother: list[str]
         "'errors' against the declared arm are large while its wrist RMSE is lower than the "
         "declared model's on these trials. The shoulder/length goals, set against a fixed "
         "shoulder, cannot be met by any fixed sphere here. The issue's remedy is the drifting "
-        "shoulder state of the orientation-aware smoother (second table); 'Where the error "
-        "is' (above) measures why it does not help on these recordings and what does.", "",
+        "arm of the orientation-aware smoother, here with the rest update (second table); "
+        "'Where the error is' (above) measures what limits it on each trial.", "",
         "**Simulated tasks.** The control row (exact IMU orientation) shows the estimator "
         "meeting the shoulder and length goals on a circle, the wrist near its goal. With the "
         "MTw-class 1° orientation error the accelerometer "
