@@ -9,12 +9,17 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import DataError
-from armtrack_cli.fuse import arm_auto, models
+from armtrack_cli.fuse import arm_auto, arm_refine, models
+from armtrack_cli.fuse.methods import run as run_method
+from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.session.arm_file import read_arm_estimate
 from armtrack_cli.session.config import Session
 
 ANCHORED_WALK = 0.001  # rad/√s: the gyro-anchored orientation's error is nearly constant (its
 #                        white-noise walk: ~0.1° over 20 s; docs/validation-from-mocap.md)
+REFINE_SHOULDER_SD_M = 0.10  # the refinement's prior on the shoulder about the sphere fit: wide
+DECLARED_SD_M = 1e-6  # a declared constant, held in the refinement
+REFINE_MAX_MOVE_M = 0.15  # a refinement that moves a constant further has lost its way
 
 
 def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
@@ -43,7 +48,38 @@ def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
                                  prepared.projection, session.imu.forearm_unit, declared, st)
 
 
-def estimate_with_offset(session: Session, prepared, prepare_again):
+def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
+            s: FuseSettings) -> arm_auto.ArmEstimate:
+    """The sphere fit ``est`` refined by the whole session through the arm smoother with the
+    arm as static states (fuse/arm_refine.py), from a first pass (pf-constraint, smoothed)
+    with the sphere fit's arm. Free constants' priors: the shoulder about the sphere fit with
+    REFINE_SHOULDER_SD_M, the lengths the anthropometric prior (fuse/arm_auto.py); a declared
+    one is held (SD DECLARED_SD_M). The sphere fit stands when the refinement does not end
+    finite and within reach of it."""
+    inp, free = prepared.inputs, np.r_[[("shoulder_m" in est.estimated)] * 3,
+                                       "upper_arm_m" in est.estimated, "forearm_m" in est.estimated]
+    theta0 = np.r_[est.shoulder, est.upper_arm_m, est.forearm_m]
+    start = np.where(free, np.r_[est.shoulder, arm_auto.PRIOR_L], theta0)
+    sd0 = np.where(free, np.r_[[REFINE_SHOULDER_SD_M] * 3, [arm_auto.PRIOR_SD_M] * 2],
+                   DECLARED_SD_M)
+    arm0 = arm_refine.arm_of(theta0, session.imu.forearm_unit)
+    s1 = dataclasses.replace(s, method="pf-constraint", smoother="rts", shoulder="fixed")
+    x0 = np.zeros(6)
+    x0[:3], _ = models.initial_wrist(prepared.projection, inp.z[0], arm=arm0, q_WB=inp.q_WB[0],
+                                     plane_height_m=s.init_plane_m)
+    P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
+    first = run_method("pf-constraint", inp, x0, P0, prepared.projection, s1, arm0).mean
+    r = arm_refine.refine(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0, prepared.projection,
+                          s1, session.imu.forearm_unit, start, sd0, theta0)
+    sd = np.sqrt(np.maximum(np.diag(r.cov), 0.0))
+    if not (np.isfinite(r.theta).all() and np.abs(r.theta - theta0).max() < REFINE_MAX_MOVE_M):
+        return est
+    return dataclasses.replace(est, shoulder=r.theta[:3].copy(), upper_arm_m=float(r.theta[3]),
+                               forearm_m=float(r.theta[4]), sd=np.where(free, sd, 0.0),
+                               sphere_fit=est.as_dict(), refine_iterations=r.iterations)
+
+
+def estimate_with_offset(session: Session, prepared, prepare_again, s: FuseSettings):
     """The arm, and the IMU's offset with it: the offset was set before the arm was known (its
     depths then from the first detection's range, no sphere), so it is set again with the
     estimated arm's depths, "auto" estimated or a declared value checked (and warned about,
@@ -55,8 +91,10 @@ def estimate_with_offset(session: Session, prepared, prepare_again):
     known = dataclasses.replace(known, arm=dataclasses.replace(known.arm, auto=()))
     again = prepare_again(known)
     if session.sync.imu_offset_s != "auto":
-        return est, dataclasses.replace(prepared, imu_offset=again.imu_offset)
-    return estimate(session, again), again
+        prepared = dataclasses.replace(prepared, imu_offset=again.imu_offset)
+    else:
+        est, prepared = estimate(session, again), again
+    return refined(session, prepared, est, s), prepared
 
 
 def with_arm(session: Session, shoulder, upper_arm_m: float, forearm_m: float) -> Session:
