@@ -66,6 +66,7 @@ class ArmEstimate:
     wrist: np.ndarray  # (frames, 3) the batch's own wrist estimates, m in W
     sphere_fit: dict | None = None  # this batch's own estimate, when refined (arm_refine.py)
     refine_iterations: int = 0
+    flattest: np.ndarray | None = None  # (5,) the move of PARAMS that costs 1 in log-likelihood
 
     def as_dict(self) -> dict:
         return {"estimated": list(self.estimated),
@@ -78,6 +79,8 @@ class ArmEstimate:
                 "rms_constraint_m": round(self.rms_constraint_m, 4),
                 **({"refined_by": "arm smoother, arm as static states (fuse/arm_refine.py)",
                     "refine_iterations": self.refine_iterations,
+                    "flattest_per_unit_log_likelihood_m": [round(float(v), 4)
+                                                           for v in self.flattest],
                     "sphere_fit": {k: self.sphere_fit[k] for k in (
                         "shoulder_m", "shoulder_sd_m", "upper_arm_m", "upper_arm_sd_m",
                         "forearm_m", "forearm_sd_m")}} if self.sphere_fit else {})}

@@ -168,3 +168,35 @@ def profile_log_likelihood(imu: arm_smoother.ImuSamples, t_frames: np.ndarray, z
     Hc, zc, Hk, zk = arm_smoother.linearise(X, z, q_hat, proj, arm, arm.shoulder)
     return log_likelihood(m, Hc, zc, use_c & ~gated, s.pixel_sigma**2, Hk, zk, use_k,
                           s.constraint_sigma_m**2)
+
+
+def maximise_quadratic(fun, x0: np.ndarray, L: np.ndarray, *, rounds: int = 2,
+                       max_step: float = 3.0) -> tuple[np.ndarray, float, np.ndarray]:
+    """Maximise a smooth ``fun`` near x0 in the coordinates y of x = x0 + L y (L (n, m): a
+    square root of the expected covariance, so that fun is about −½|y|² + const there): each
+    round fits a full quadratic to 1 + 2m + m(m−1)/2 values at unit steps (central differences
+    for the gradient and the Hessian's diagonal, the four-point rule for its other entries),
+    takes its Newton step (the Hessian's eigenvalues held at or below −1/max_step², the step at
+    most max_step long) and keeps the new point when fun is higher there. Returns x, fun(x)
+    and the fitted Hessian of fun in x's units (pseudo-inverse of L where L is not square)."""
+    m = L.shape[1]
+    x, f0 = np.asarray(x0, float), fun(x0)
+    Hy = -np.eye(m)
+    for _ in range(rounds):
+        E = np.eye(m)
+        fp = np.array([fun(x + L @ E[i]) for i in range(m)])
+        fm = np.array([fun(x - L @ E[i]) for i in range(m)])
+        g = (fp - fm) / 2
+        Hy = np.diag(fp - 2 * f0 + fm)
+        for i in range(m):
+            for j in range(i + 1, m):
+                Hy[i, j] = Hy[j, i] = fun(x + L @ (E[i] + E[j])) - fp[i] - fp[j] + f0
+        w, V = np.linalg.eigh(Hy)
+        step = -V @ ((V.T @ g) / np.minimum(w, -1.0 / max_step**2))
+        step *= min(1.0, max_step / max(np.linalg.norm(step), 1e-300))
+        fn = fun(x + L @ step)
+        if not fn > f0:
+            break
+        x, f0 = x + L @ step, fn
+    Li = np.linalg.pinv(L)
+    return x, f0, Li.T @ Hy @ Li

@@ -48,35 +48,69 @@ def estimate(session: Session, prepared) -> arm_auto.ArmEstimate:
                                  prepared.projection, session.imu.forearm_unit, declared, st)
 
 
-def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
-            s: FuseSettings) -> arm_auto.ArmEstimate:
-    """The sphere fit ``est`` refined by the whole session through the arm smoother with the
-    arm as static states (fuse/arm_refine.py), from a first pass (pf-constraint, smoothed)
-    with the sphere fit's arm. Free constants' priors: the shoulder about the sphere fit with
-    REFINE_SHOULDER_SD_M, the lengths the anthropometric prior (fuse/arm_auto.py); a declared
-    one is held (SD DECLARED_SD_M). The sphere fit stands when the refinement does not end
-    finite and within reach of it."""
-    inp, free = prepared.inputs, np.r_[[("shoulder_m" in est.estimated)] * 3,
-                                       "upper_arm_m" in est.estimated, "forearm_m" in est.estimated]
-    theta0 = np.r_[est.shoulder, est.upper_arm_m, est.forearm_m]
-    start = np.where(free, np.r_[est.shoulder, arm_auto.PRIOR_L], theta0)
-    sd0 = np.where(free, np.r_[[REFINE_SHOULDER_SD_M] * 3, [arm_auto.PRIOR_SD_M] * 2],
-                   DECLARED_SD_M)
-    arm0 = arm_refine.arm_of(theta0, session.imu.forearm_unit)
-    s1 = dataclasses.replace(s, method="pf-constraint", smoother="rts", shoulder="fixed")
+def _first_pass(prepared, arm: models.Arm, s: FuseSettings):
+    """x0, P0 and the first pass (pf-constraint, smoothed: (n, 6)) with this arm, as fuse
+    starts the arm smoother."""
+    inp = prepared.inputs
     x0 = np.zeros(6)
-    x0[:3], _ = models.initial_wrist(prepared.projection, inp.z[0], arm=arm0, q_WB=inp.q_WB[0],
+    x0[:3], _ = models.initial_wrist(prepared.projection, inp.z[0], arm=arm, q_WB=inp.q_WB[0],
                                      plane_height_m=s.init_plane_m)
     P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
-    first = run_method("pf-constraint", inp, x0, P0, prepared.projection, s1, arm0).mean
+    return x0, P0, run_method("pf-constraint", inp, x0, P0, prepared.projection, s, arm).mean
+
+
+def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
+            s: FuseSettings) -> arm_auto.ArmEstimate:
+    """The sphere fit ``est`` refined by the whole session (fuse/arm_refine.py): the arm
+    smoother with the arm as static states from the sphere fit, then the maximum of the
+    profile log-posterior (log p(data | arm) + log prior, the arm smoother's own model) by
+    quadratic fits in the static states' SD units. Free constants' priors: the shoulder about
+    the sphere fit with REFINE_SHOULDER_SD_M, the lengths the anthropometric prior
+    (fuse/arm_auto.py); a declared one is held. The sphere fit stands when the refinement does
+    not end finite and within REFINE_MAX_MOVE_M of it."""
+    inp, fa = prepared.inputs, session.imu.forearm_unit
+    free = np.r_[[("shoulder_m" in est.estimated)] * 3, "upper_arm_m" in est.estimated,
+                 "forearm_m" in est.estimated]
+    theta0 = np.r_[est.shoulder, est.upper_arm_m, est.forearm_m]
+    mean = np.where(free, np.r_[est.shoulder, arm_auto.PRIOR_L], theta0)
+    sd0 = np.where(free, np.r_[[REFINE_SHOULDER_SD_M] * 3, [arm_auto.PRIOR_SD_M] * 2],
+                   DECLARED_SD_M)
+    s1 = dataclasses.replace(s, method="pf-constraint", smoother="rts", shoulder="fixed")
+    x0, P0, first = _first_pass(prepared, arm_refine.arm_of(theta0, fa), s1)
     r = arm_refine.refine(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0, prepared.projection,
-                          s1, session.imu.forearm_unit, start, sd0, theta0)
-    sd = np.sqrt(np.maximum(np.diag(r.cov), 0.0))
-    if not (np.isfinite(r.theta).all() and np.abs(r.theta - theta0).max() < REFINE_MAX_MOVE_M):
+                          s1, fa, mean, sd0, theta0)
+    if not (np.isfinite(r.theta).all() and np.isfinite(r.cov).all()):
         return est
-    return dataclasses.replace(est, shoulder=r.theta[:3].copy(), upper_arm_m=float(r.theta[3]),
-                               forearm_m=float(r.theta[4]), sd=np.where(free, sd, 0.0),
-                               sphere_fit=est.as_dict(), refine_iterations=r.iterations)
+
+    def log_posterior(theta):
+        return log_likelihood(session, prepared, theta, s1) \
+            - 0.5 * float(np.sum(((theta - mean)[free] / sd0[free]) ** 2))
+
+    cov = r.cov[np.ix_(free, free)]
+    L = np.zeros((5, int(free.sum())))
+    L[free] = np.linalg.cholesky(0.5 * (cov + cov.T))
+    theta, _, H = arm_refine.maximise_quadratic(log_posterior, r.theta, L)
+    if not (np.isfinite(theta).all() and np.abs(theta - theta0).max() < REFINE_MAX_MOVE_M):
+        return est
+    w, V = np.linalg.eigh(H[np.ix_(free, free)])
+    cov_f = np.linalg.inv(-H[np.ix_(free, free)]) if (w < 0).all() else cov
+    sd, flat = np.zeros(5), np.zeros(5)
+    sd[free] = np.sqrt(np.maximum(np.diag(cov_f), 0.0))
+    # the flattest direction: ½|λ|δ² = 1 along the eigenvector of the largest eigenvalue λ < 0
+    flat[free] = V[:, -1] * np.sqrt(2.0 / max(-w[-1], 1e-12)) * np.sign(V[np.argmax(
+        np.abs(V[:, -1])), -1])
+    return dataclasses.replace(est, shoulder=theta[:3].copy(), upper_arm_m=float(theta[3]),
+                               forearm_m=float(theta[4]), sd=sd, sphere_fit=est.as_dict(),
+                               refine_iterations=r.iterations, flattest=flat)
+
+
+def log_likelihood(session: Session, prepared, theta: np.ndarray, s: FuseSettings) -> float:
+    """log p(data | arm θ = (S, L1, L2)): the arm smoother's (fuse/arm_refine.py) from a
+    first pass with that arm."""
+    inp, arm = prepared.inputs, arm_refine.arm_of(theta, session.imu.forearm_unit)
+    x0, P0, first = _first_pass(prepared, arm, s)
+    return arm_refine.profile_log_likelihood(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0,
+                                             prepared.projection, s, arm)
 
 
 def estimate_with_offset(session: Session, prepared, prepare_again, s: FuseSettings):
