@@ -51,7 +51,8 @@ def _auto_copy(folder: Path) -> Path:
 
 def likelihood_gap(folder: Path, est: dict, s: ArmSimSettings) -> float:
     """log p(data | true arm) − log p(data | estimated arm), the arm smoother's own
-    (pipeline/arm_model.log_likelihood): > 0 where the data favour the truth (the search fell
+    (pipeline/arm_model.log_likelihood, both from the estimate's first pass, as the search
+    evaluates it): > 0 where the data favour the truth (the search fell
     short of it), ≤ 0 where they favour the estimate (no search could do better)."""
     import dataclasses
     import importlib
@@ -66,7 +67,9 @@ def likelihood_gap(folder: Path, est: dict, s: ArmSimSettings) -> float:
     p = fuse_mod.prepare(sess, folder / "armtrack", fs)
     true = np.r_[s.shoulder, s.upper_arm_m, s.forearm_m]
     got = np.r_[est["shoulder_m"], est["upper_arm_m"], est["forearm_m"]]
-    return arm_model.log_likelihood(sess, p, true, fs) - arm_model.log_likelihood(sess, p, got, fs)
+    start = arm_model._first_pass(p, arm_model.arm_refine.arm_of(got, sess.imu.forearm_unit), fs)
+    return (arm_model.log_likelihood(sess, p, true, fs, start)
+            - arm_model.log_likelihood(sess, p, got, fs, start))
 
 
 def session_row(folder: Path, s: ArmSimSettings) -> dict:

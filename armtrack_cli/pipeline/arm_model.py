@@ -63,8 +63,9 @@ def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
             s: FuseSettings) -> arm_auto.ArmEstimate:
     """The sphere fit ``est`` refined by the whole session (fuse/arm_refine.py): the arm
     smoother with the arm as static states from the sphere fit, then the maximum of the
-    profile log-posterior (log p(data | arm) + log prior, the arm smoother's own model) by
-    quadratic fits in the static states' SD units. Free constants' priors: the shoulder about
+    profile log-posterior (log p(data | arm) + log prior, the arm smoother's own model, each
+    evaluation's Gauss–Newton started from the static-state pass's arm) by quadratic fits in
+    the static states' SD units. Free constants' priors: the shoulder about
     the sphere fit with REFINE_SHOULDER_SD_M, the lengths the anthropometric prior
     (fuse/arm_auto.py); a declared one is held. The sphere fit stands when the refinement does
     not end finite and within REFINE_MAX_MOVE_M of it."""
@@ -82,8 +83,10 @@ def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
     if not (np.isfinite(r.theta).all() and np.isfinite(r.cov).all()):
         return est
 
-    def log_posterior(theta):
-        return log_likelihood(session, prepared, theta, s1) \
+    start = _first_pass(prepared, arm_refine.arm_of(r.theta, fa), s1)  # one start for all:
+
+    def log_posterior(theta):  # … the search's function then moves smoothly with θ
+        return log_likelihood(session, prepared, theta, s1, start) \
             - 0.5 * float(np.sum(((theta - mean)[free] / sd0[free]) ** 2))
 
     cov = r.cov[np.ix_(free, free)]
@@ -104,11 +107,13 @@ def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
                                refine_iterations=r.iterations, flattest=flat)
 
 
-def log_likelihood(session: Session, prepared, theta: np.ndarray, s: FuseSettings) -> float:
-    """log p(data | arm θ = (S, L1, L2)): the arm smoother's (fuse/arm_refine.py) from a
-    first pass with that arm."""
+def log_likelihood(session: Session, prepared, theta: np.ndarray, s: FuseSettings,
+                   start=None) -> float:
+    """log p(data | arm θ = (S, L1, L2)): the arm smoother's (fuse/arm_refine.py), its
+    Gauss–Newton started from ``start`` (x0, P0, first pass: _first_pass's) or, without it,
+    from a first pass with this arm."""
     inp, arm = prepared.inputs, arm_refine.arm_of(theta, session.imu.forearm_unit)
-    x0, P0, first = _first_pass(prepared, arm, s)
+    x0, P0, first = start if start is not None else _first_pass(prepared, arm, s)
     return arm_refine.profile_log_likelihood(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0,
                                              prepared.projection, s, arm)
 
