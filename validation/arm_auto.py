@@ -49,6 +49,24 @@ def _auto_copy(folder: Path) -> Path:
     return dest
 
 
+def declared_as(auto: Path, arm: dict, name: str) -> Path:
+    """A copy of the "auto" session with ``arm`` (an arm-auto.json entry) declared, calibrate's
+    and detect's outputs copied."""
+    dest = auto.parent / f"{auto.name}-{name}"
+    dest.mkdir()
+    for f in auto.iterdir():
+        if f.is_file() and f.name != "session.toml":
+            (dest / f.name).symlink_to(f.resolve())
+    text = (auto / "session.toml").read_text()
+    values = {"shoulder_m": "[" + ", ".join(f"{v:.4f}" for v in arm["shoulder_m"]) + "]",
+              "upper_arm_m": f"{arm['upper_arm_m']:.4f}", "forearm_m": f"{arm['forearm_m']:.4f}"}
+    for key, v in values.items():
+        text = text.replace(f'{key} = "auto"', f"{key} = {v}")
+    (dest / "session.toml").write_text(text)
+    shutil.copytree(auto / "armtrack", dest / "armtrack")
+    return dest
+
+
 def likelihood_gap(folder: Path, est: dict, s: ArmSimSettings) -> float:
     """log p(data | true arm) − log p(data | estimated arm), the arm smoother's own
     (pipeline/arm_model.log_likelihood, both from the estimate's first pass, as the search
@@ -88,6 +106,8 @@ def session_row(folder: Path, s: ArmSimSettings) -> dict:
     row["d_L2"] = (est["forearm_m"] - s.forearm_m) * 100
     row["sd"] = np.r_[est["shoulder_sd_m"], est["upper_arm_sd_m"], est["forearm_sd_m"]] * 100
     fit = est.get("sphere_fit", est)
+    row["stages"] = [_wrist(f, f / "armtrack", METHODS[0]) for f in (
+        declared_as(auto, fit, "fit"), declared_as(auto, est.get("static_states", fit), "static"))]
     row["d_shoulder_fit"] = (np.array(fit["shoulder_m"]) - np.array(s.shoulder)) * 100
     row["flat_cm"] = np.array(est.get("flattest_per_unit_log_likelihood_m", [np.nan] * 5)) * 100
     row["ll_gap"] = likelihood_gap(folder, est, s)
@@ -100,11 +120,12 @@ def session_row(folder: Path, s: ArmSimSettings) -> dict:
 
 def line(name: str, r: dict) -> str:
     if "error" in r:
-        return f"| {name} | not computable: {r['error']} |||||||||||"
+        return f"| {name} | not computable: {r['error']} |||||||||||||"
     sh = ", ".join(f"{v:+.1f}" for v in r["d_shoulder"])
     sd = ", ".join(f"{v:.1f}" for v in r["sd"][:3])
     cells = " | ".join(f"{r['declared'][m]:.2f} | {r['auto'][m]:.2f}" for m in METHODS)
-    return (f"| {name} | {cells} | {sh} ({sd}) | {np.linalg.norm(r['d_shoulder']):.1f} | "
+    stages = " | ".join(f"{v:.2f}" for v in r["stages"])
+    return (f"| {name} | {cells} | {stages} | {sh} ({sd}) | {np.linalg.norm(r['d_shoulder']):.1f} | "
             f"{r['d_L1']:+.1f} ({r['sd'][3]:.1f}) | {r['d_L2']:+.1f} ({r['sd'][4]:.1f}) | "
             f"{'yes' if r['met'] else 'no'} | {np.linalg.norm(r['d_shoulder_fit']):.1f} | "
             f"{r['ll_gap']:+.2f} | {np.linalg.norm(r['flat_cm'][:3]):.1f} "
@@ -112,11 +133,12 @@ def line(name: str, r: dict) -> str:
 
 
 HEADER = ["| session | arm-smoother wrist RMSE, declared arm (cm) | … auto arm | pf-constraint, "
-          "declared | … auto | shoulder error x, y, z (SD) cm | shoulder error, 3-D cm | "
+          "declared | … auto | arm-smoother, arm of the sphere fit alone | … of the static-state "
+          "pass | shoulder error x, y, z (SD) cm | shoulder error, 3-D cm | "
           "L1 error (SD) cm | L2 error (SD) cm | all goals | shoulder error, 3-D cm, of the "
           "sphere fit alone | log-likelihood, true arm − estimate | shoulder move costing 1 in "
           "log-likelihood, cm (S x, y, z, L1, L2) |",
-          "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
 
 
 def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> None:
@@ -126,6 +148,7 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> N
     ln = [max(abs(r["d_L1"]), abs(r["d_L2"])) for r in ok]
     ratio = [r["auto"][METHODS[0]] / r["declared"][METHODS[0]] for r in ok]
     gap = [r["ll_gap"] for r in ok]
+    stage = [[r["stages"][i] / r["declared"][METHODS[0]] for r in ok] for i in (0, 1)]
     flat = [float(np.linalg.norm(r["flat_cm"][:3])) for r in ok]
     lines = [
         "# The arm model from the data on simulated tasks", "",
@@ -150,7 +173,12 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> N
         f"cm (sphere fit {max(fit, default=np.nan):.1f}); both lengths within 1 cm on "
         f"{sum(v <= 1 for v in ln)}, max {max(ln, default=np.nan):.1f} cm; wrist RMSE auto / "
         f"declared (arm-smoother) ≤ 1.2 on {sum(v <= 1.2 for v in ratio)}, max "
-        f"{max(ratio, default=np.nan):.2f}; all goals on {sum(r['met'] for r in ok)}. The true "
+        f"{max(ratio, default=np.nan):.2f} (with the sphere fit's arm alone on "
+        f"{sum(v <= 1.2 for v in stage[0])}, max {max(stage[0], default=np.nan):.2f}; with the "
+        f"static-state pass's on {sum(v <= 1.2 for v in stage[1])}, max "
+        f"{max(stage[1], default=np.nan):.2f}; median ratio final / fit / static "
+        f"{np.median(ratio):.2f} / {np.median(stage[0]):.2f} / {np.median(stage[1]):.2f}); "
+        f"all goals on {sum(r['met'] for r in ok)}. The true "
         f"arm's log-likelihood exceeds the estimate's by more than 1 on "
         f"{sum(g > 1 for g in gap)} (range {min(gap, default=np.nan):+.2f} to "
         f"{max(gap, default=np.nan):+.2f}); a unit of log-likelihood moves the shoulder by "

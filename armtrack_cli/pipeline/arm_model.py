@@ -104,7 +104,8 @@ def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
         np.abs(V[:, -1])), -1])
     return dataclasses.replace(est, shoulder=theta[:3].copy(), upper_arm_m=float(theta[3]),
                                forearm_m=float(theta[4]), sd=sd, sphere_fit=est.as_dict(),
-                               refine_iterations=r.iterations, flattest=flat)
+                               refine_iterations=r.iterations, flattest=flat,
+                               static_states=r.theta.copy())
 
 
 def log_likelihood(session: Session, prepared, theta: np.ndarray, s: FuseSettings,
