@@ -99,3 +99,14 @@ def test_quadratic_search_keeps_its_start_where_nothing_is_higher():
 
     x, fx, _ = arm_refine.maximise_quadratic(f, np.zeros(2), np.eye(2))
     assert (x == 0).all() and fx == 0.0
+
+
+def test_quadratic_fit_without_a_step_stays_and_measures_the_curvature():
+    H = np.array([[-2.0, 0.3], [0.3, -0.5]])
+
+    def f(x):
+        return 0.5 * (x - 1.0) @ H @ (x - 1.0)
+
+    x, fx, Hfit = arm_refine.maximise_quadratic(f, np.zeros(2), 0.7 * np.eye(2), step=False)
+    assert (x == 0).all() and fx == f(np.zeros(2))
+    np.testing.assert_allclose(Hfit, H, atol=1e-9)

@@ -66,8 +66,6 @@ class ArmEstimate:
     wrist: np.ndarray  # (frames, 3) the batch's own wrist estimates, m in W
     sphere_fit: dict | None = None  # this batch's own estimate, when refined (arm_refine.py)
     refine_iterations: int = 0
-    flattest: np.ndarray | None = None  # (5,) the move of PARAMS that costs 1 in log-likelihood
-    static_states: np.ndarray | None = None  # (5,) PARAMS after the static-state pass alone
 
     def as_dict(self) -> dict:
         return {"estimated": list(self.estimated),
@@ -80,17 +78,9 @@ class ArmEstimate:
                 "rms_constraint_m": round(self.rms_constraint_m, 4),
                 **({"refined_by": "arm smoother, arm as static states (fuse/arm_refine.py)",
                     "refine_iterations": self.refine_iterations,
-                    "flattest_per_unit_log_likelihood_m": [round(float(v), 4)
-                                                           for v in self.flattest],
-                    "static_states": _arm_dict(self.static_states),
                     "sphere_fit": {k: self.sphere_fit[k] for k in (
                         "shoulder_m", "shoulder_sd_m", "upper_arm_m", "upper_arm_sd_m",
                         "forearm_m", "forearm_sd_m")}} if self.sphere_fit else {})}
-
-
-def _arm_dict(theta: np.ndarray) -> dict:
-    return {"shoulder_m": [round(float(v), 4) for v in theta[:3]],
-            "upper_arm_m": round(float(theta[3]), 4), "forearm_m": round(float(theta[4]), 4)}
 
 
 def varied_stretch(uv: np.ndarray, f_W: np.ndarray, n: int) -> slice:

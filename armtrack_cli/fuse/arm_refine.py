@@ -171,14 +171,16 @@ def profile_log_likelihood(imu: arm_smoother.ImuSamples, t_frames: np.ndarray, z
 
 
 def maximise_quadratic(fun, x0: np.ndarray, L: np.ndarray, *, rounds: int = 2,
-                       max_step: float = 3.0) -> tuple[np.ndarray, float, np.ndarray]:
+                       max_step: float = 3.0, step: bool = True
+                       ) -> tuple[np.ndarray, float, np.ndarray]:
     """Maximise a smooth ``fun`` near x0 in the coordinates y of x = x0 + L y (L (n, m): a
     square root of the expected covariance, so that fun is about −½|y|² + const there): each
     round fits a full quadratic to 1 + 2m + m(m−1)/2 values at unit steps (central differences
     for the gradient and the Hessian's diagonal, the four-point rule for its other entries),
     takes its Newton step (the Hessian's eigenvalues held at or below −1/max_step², the step at
     most max_step long) and keeps the new point when fun is higher there. Returns x, fun(x)
-    and the fitted Hessian of fun in x's units (pseudo-inverse of L where L is not square)."""
+    and the fitted Hessian of fun in x's units (pseudo-inverse of L where L is not square);
+    ``step = False`` fits the quadratic at x0 and stays there."""
     m = L.shape[1]
     x, f0 = np.asarray(x0, float), fun(x0)
     Hy = -np.eye(m)
@@ -191,12 +193,14 @@ def maximise_quadratic(fun, x0: np.ndarray, L: np.ndarray, *, rounds: int = 2,
         for i in range(m):
             for j in range(i + 1, m):
                 Hy[i, j] = Hy[j, i] = fun(x + L @ (E[i] + E[j])) - fp[i] - fp[j] + f0
+        if not step:
+            break
         w, V = np.linalg.eigh(Hy)
-        step = -V @ ((V.T @ g) / np.minimum(w, -1.0 / max_step**2))
-        step *= min(1.0, max_step / max(np.linalg.norm(step), 1e-300))
-        fn = fun(x + L @ step)
+        dy = -V @ ((V.T @ g) / np.minimum(w, -1.0 / max_step**2))
+        dy *= min(1.0, max_step / max(np.linalg.norm(dy), 1e-300))
+        fn = fun(x + L @ dy)
         if not fn > f0:
             break
-        x, f0 = x + L @ step, fn
+        x, f0 = x + L @ dy, fn
     Li = np.linalg.pinv(L)
     return x, f0, Li.T @ Hy @ Li

@@ -59,53 +59,73 @@ def _first_pass(prepared, arm: models.Arm, s: FuseSettings):
     return x0, P0, run_method("pf-constraint", inp, x0, P0, prepared.projection, s, arm).mean
 
 
+def free_of(estimated) -> np.ndarray:
+    """(5,) bool: which of arm_auto.PARAMS the names in ``estimated`` make free."""
+    return np.r_[[("shoulder_m" in estimated)] * 3, "upper_arm_m" in estimated,
+                 "forearm_m" in estimated]
+
+
+def _prior(free: np.ndarray, theta: np.ndarray, shoulder: np.ndarray):
+    """The refinement's prior (mean, SD) on all five constants: a free shoulder about
+    ``shoulder`` (the sphere fit's) with REFINE_SHOULDER_SD_M, free lengths the anthropometric
+    prior (fuse/arm_auto.py); a declared one (``theta``'s) held (DECLARED_SD_M)."""
+    mean = np.where(free, np.r_[shoulder, arm_auto.PRIOR_L], theta)
+    sd = np.where(free, np.r_[[REFINE_SHOULDER_SD_M] * 3, [arm_auto.PRIOR_SD_M] * 2],
+                  DECLARED_SD_M)
+    return mean, sd
+
+
 def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
             s: FuseSettings) -> arm_auto.ArmEstimate:
-    """The sphere fit ``est`` refined by the whole session (fuse/arm_refine.py): the arm
-    smoother with the arm as static states from the sphere fit, then the maximum of the
-    profile log-posterior (log p(data | arm) + log prior, the arm smoother's own model, each
-    evaluation's Gauss–Newton started from the static-state pass's arm) by quadratic fits in
-    the static states' SD units. Free constants' priors: the shoulder about
-    the sphere fit with REFINE_SHOULDER_SD_M, the lengths the anthropometric prior
-    (fuse/arm_auto.py); a declared one is held. The sphere fit stands when the refinement does
+    """The sphere fit ``est`` refined by the whole session: the arm smoother with the arm as
+    static states (fuse/arm_refine.py), iterated from the sphere fit and a first pass with its
+    arm; SDs from the smoother's covariance. The sphere fit stands when the refinement does
     not end finite and within REFINE_MAX_MOVE_M of it."""
     inp, fa = prepared.inputs, session.imu.forearm_unit
-    free = np.r_[[("shoulder_m" in est.estimated)] * 3, "upper_arm_m" in est.estimated,
-                 "forearm_m" in est.estimated]
-    theta0 = np.r_[est.shoulder, est.upper_arm_m, est.forearm_m]
-    mean = np.where(free, np.r_[est.shoulder, arm_auto.PRIOR_L], theta0)
-    sd0 = np.where(free, np.r_[[REFINE_SHOULDER_SD_M] * 3, [arm_auto.PRIOR_SD_M] * 2],
-                   DECLARED_SD_M)
+    theta0, free = np.r_[est.shoulder, est.upper_arm_m, est.forearm_m], free_of(est.estimated)
+    mean, sd0 = _prior(free, theta0, est.shoulder)
     s1 = dataclasses.replace(s, method="pf-constraint", smoother="rts", shoulder="fixed")
     x0, P0, first = _first_pass(prepared, arm_refine.arm_of(theta0, fa), s1)
     r = arm_refine.refine(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0, prepared.projection,
                           s1, fa, mean, sd0, theta0)
-    if not (np.isfinite(r.theta).all() and np.isfinite(r.cov).all()):
+    if not (np.isfinite(r.theta).all() and np.isfinite(r.cov).all()
+            and np.abs(r.theta - theta0).max() < REFINE_MAX_MOVE_M):
         return est
+    sd = np.where(free, np.sqrt(np.maximum(np.diag(r.cov), 0.0)), 0.0)
+    return dataclasses.replace(est, shoulder=r.theta[:3].copy(), upper_arm_m=float(r.theta[3]),
+                               forearm_m=float(r.theta[4]), sd=sd, sphere_fit=est.as_dict(),
+                               refine_iterations=r.iterations)
 
-    start = _first_pass(prepared, arm_refine.arm_of(r.theta, fa), s1)  # one start for all:
 
-    def log_posterior(theta):  # … the search's function then moves smoothly with θ
+def profile_maximum(session: Session, prepared, est: dict, s: FuseSettings, *,
+                    rounds: int = 2):
+    """The maximum of the profile log-posterior log p(data | arm) + log prior (the arm
+    smoother's model; each evaluation's Gauss–Newton started from a first pass with ``est``'s
+    arm, so the function moves smoothly with the arm) near the refined ``est`` (arm-auto.json's
+    dict, ArmEstimate.as_dict), by quadratic
+    fits in its SD units (arm_refine.maximise_quadratic): the arm (5,), its log-posterior,
+    the fitted Hessian (5, 5) and the move of the constants along the flattest direction
+    that lowers the log-posterior by 1 (5,). What validation/arm_auto.py measures the
+    likelihood's flatness with; ``rounds = 0`` fits the curvature at ``est`` alone."""
+    fa, free = session.imu.forearm_unit, free_of(est["estimated"])
+    theta0 = np.r_[est["shoulder_m"], est["upper_arm_m"], est["forearm_m"]]
+    mean, sd0 = _prior(free, theta0, np.asarray(est.get("sphere_fit", est)["shoulder_m"]))
+    s1 = dataclasses.replace(s, method="pf-constraint", smoother="rts", shoulder="fixed")
+    sd = np.r_[est["shoulder_sd_m"], est["upper_arm_sd_m"], est["forearm_sd_m"]]
+    start = _first_pass(prepared, arm_refine.arm_of(theta0, fa), s1)
+
+    def log_posterior(theta):
         return log_likelihood(session, prepared, theta, s1, start) \
             - 0.5 * float(np.sum(((theta - mean)[free] / sd0[free]) ** 2))
 
-    cov = r.cov[np.ix_(free, free)]
-    L = np.zeros((5, int(free.sum())))
-    L[free] = np.linalg.cholesky(0.5 * (cov + cov.T))
-    theta, _, H = arm_refine.maximise_quadratic(log_posterior, r.theta, L)
-    if not (np.isfinite(theta).all() and np.abs(theta - theta0).max() < REFINE_MAX_MOVE_M):
-        return est
+    L = np.diag(np.where(free, sd, 0.0))[:, free]
+    theta, top, H = arm_refine.maximise_quadratic(log_posterior, theta0, L, rounds=max(rounds, 1),
+                                                  step=rounds > 0)
     w, V = np.linalg.eigh(H[np.ix_(free, free)])
-    cov_f = np.linalg.inv(-H[np.ix_(free, free)]) if (w < 0).all() else cov
-    sd, flat = np.zeros(5), np.zeros(5)
-    sd[free] = np.sqrt(np.maximum(np.diag(cov_f), 0.0))
-    # the flattest direction: ½|λ|δ² = 1 along the eigenvector of the largest eigenvalue λ < 0
-    flat[free] = V[:, -1] * np.sqrt(2.0 / max(-w[-1], 1e-12)) * np.sign(V[np.argmax(
-        np.abs(V[:, -1])), -1])
-    return dataclasses.replace(est, shoulder=theta[:3].copy(), upper_arm_m=float(theta[3]),
-                               forearm_m=float(theta[4]), sd=sd, sphere_fit=est.as_dict(),
-                               refine_iterations=r.iterations, flattest=flat,
-                               static_states=r.theta.copy())
+    flat = np.zeros(5)  # ½|λ|δ² = 1 along the eigenvector of the eigenvalue nearest zero
+    flat[free] = V[:, -1] * (np.sqrt(2.0 / -w[-1]) if w[-1] < 0 else np.inf) * np.sign(
+        V[np.argmax(np.abs(V[:, -1])), -1])
+    return theta, top, H, flat
 
 
 def log_likelihood(session: Session, prepared, theta: np.ndarray, s: FuseSettings,
