@@ -19,6 +19,8 @@ ANCHORED_WALK = 0.001  # rad/√s: the gyro-anchored orientation's error is near
 #                        white-noise walk: ~0.1° over 20 s; docs/validation-from-mocap.md)
 REFINE_SHOULDER_SD_M = 0.10  # the refinement's prior on the shoulder about the sphere fit: wide
 DECLARED_SD_M = 1e-6  # a declared constant, held in the refinement
+PROFILE_STEP_SD = 2.0  # the quadratic fits' step: 2 SDs, a log-likelihood change of ~2, well
+#                       above the smoother's convergence noise
 REFINE_MAX_MOVE_M = 0.15  # a refinement that moves a constant further has lost its way
 
 
@@ -103,7 +105,8 @@ def profile_maximum(session: Session, prepared, est: dict, s: FuseSettings, *,
     smoother's model; each evaluation's Gauss–Newton started from a first pass with ``est``'s
     arm, so the function moves smoothly with the arm) near the refined ``est`` (arm-auto.json's
     dict, ArmEstimate.as_dict), by quadratic
-    fits in its SD units (arm_refine.maximise_quadratic): the arm (5,), its log-posterior,
+    fits with steps of PROFILE_STEP_SD SDs (arm_refine.maximise_quadratic; a move of at most
+    3 SDs a round): the arm (5,), its log-posterior,
     the fitted Hessian (5, 5) and the move of the constants along the flattest direction
     that lowers the log-posterior by 1 (5,). What validation/arm_auto.py measures the
     likelihood's flatness with; ``rounds = 0`` fits the curvature at ``est`` alone."""
@@ -118,9 +121,9 @@ def profile_maximum(session: Session, prepared, est: dict, s: FuseSettings, *,
         return log_likelihood(session, prepared, theta, s1, start) \
             - 0.5 * float(np.sum(((theta - mean)[free] / sd0[free]) ** 2))
 
-    L = np.diag(np.where(free, sd, 0.0))[:, free]
+    L = PROFILE_STEP_SD * np.diag(np.where(free, sd, 0.0))[:, free]
     theta, top, H = arm_refine.maximise_quadratic(log_posterior, theta0, L, rounds=max(rounds, 1),
-                                                  step=rounds > 0)
+                                                  max_step=1.5, step=rounds > 0)
     w, V = np.linalg.eigh(H[np.ix_(free, free)])
     flat = np.zeros(5)  # ½|λ|δ² = 1 along the eigenvector of the eigenvalue nearest zero
     flat[free] = V[:, -1] * (np.sqrt(2.0 / -w[-1]) if w[-1] < 0 else np.inf) * np.sign(
