@@ -206,8 +206,8 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> N
         f"{max(gap_max, default=np.nan):+.2f}); a unit of log-likelihood moves the shoulder by "
         f"{min(concave, default=np.nan):.1f}-{max(concave, default=np.nan):.1f} cm along the "
         f"flattest direction where the log-likelihood is concave at 2-SD steps "
-        f"({len(concave)} sessions; on the others some direction shows no curvature at all)."
-        , "", READING, ""]
+        f"({len(concave)} sessions; on the others some direction shows no curvature at all).",
+        "", READING, ""]
     out.write_text("\n".join(lines))
 
 

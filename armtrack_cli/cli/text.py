@@ -137,7 +137,7 @@ def arm_estimate_line(e: dict[str, Any]) -> str:
     return (f"estimated ({', '.join(e['estimated'])} from {e['from_s']:g}-{e['to_s']:g} s): "
             f"shoulder [{sh}] cm, L1 {e['upper_arm_m'] * 100:.1f}±{e['upper_arm_sd_m'] * 100:.1f} "
             f"cm, L2 {e['forearm_m'] * 100:.1f}±{e['forearm_sd_m'] * 100:.1f} cm"
-            + ("; refined by the whole session's likelihood" if "refined_by" in e else ""))
+            + ("; refined over the whole session by the arm smoother" if "refined_by" in e else ""))
 
 
 def _models(info) -> list[str]:
