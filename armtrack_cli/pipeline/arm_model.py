@@ -82,14 +82,17 @@ def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
     """The sphere fit ``est`` refined by the whole session: the arm smoother with the arm as
     static states (fuse/arm_refine.py), iterated from the sphere fit and a first pass with its
     arm; SDs from the smoother's covariance. The sphere fit stands when the refinement does
-    not end finite and within REFINE_MAX_MOVE_M of it."""
+    not end finite (or meets a singular matrix) and within REFINE_MAX_MOVE_M of it."""
     inp, fa = prepared.inputs, session.imu.forearm_unit
     theta0, free = np.r_[est.shoulder, est.upper_arm_m, est.forearm_m], free_of(est.estimated)
     mean, sd0 = _prior(free, theta0, est.shoulder)
     s1 = dataclasses.replace(s, method="pf-constraint", smoother="rts", shoulder="fixed")
     x0, P0, first = _first_pass(prepared, arm_refine.arm_of(theta0, fa), s1)
-    r = arm_refine.refine(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0, prepared.projection,
-                          s1, fa, mean, sd0, theta0)
+    try:
+        r = arm_refine.refine(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0,
+                              prepared.projection, s1, fa, mean, sd0, theta0)
+    except np.linalg.LinAlgError:  # a singular step: the sphere fit stands
+        return est
     if not (np.isfinite(r.theta).all() and np.isfinite(r.cov).all()
             and np.abs(r.theta - theta0).max() < REFINE_MAX_MOVE_M):
         return est
