@@ -201,7 +201,7 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> N
         f"{np.median(stage[1]):.2f}); all goals on {sum(r['met'] for r in ok)}. The true "
         f"arm's log-likelihood exceeds the estimate's by more than 1 on "
         f"{sum(g > 1 for g in gap)} (range {min(gap, default=np.nan):+.2f} to "
-        f"{max(gap, default=np.nan):+.2f}), the profile maximum's on "
+        f"{max(gap, default=np.nan):+.2f}), and the profile maximum's at all on "
         f"{sum(g > 0 for g in gap_max)} (range {min(gap_max, default=np.nan):+.2f} to "
         f"{max(gap_max, default=np.nan):+.2f}); a unit of log-likelihood moves the shoulder by "
         f"{min(concave, default=np.nan):.1f}-{max(concave, default=np.nan):.1f} cm along the "
@@ -209,6 +209,10 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> N
         f"({len(concave)} sessions; on the others some direction shows no curvature at all).",
         "", reading(ok), ""]
     out.write_text("\n".join(lines))
+
+
+def _span(v: list[float], unit: str = "") -> str:
+    return f"{min(v):.1f}-{max(v):.1f}{unit}" if v else "—"
 
 
 def reading(ok: list[dict]) -> str:
@@ -220,6 +224,10 @@ def reading(ok: list[dict]) -> str:
     ratio = [r["auto"][METHODS[0]] / d for r, d in zip(ok, dec)]
     ratio_fit = [r["stages"][0] / d for r, d in zip(ok, dec)]
     moved = sum(abs(r["ll_gap_max"] - r["ll_gap"]) > 1e-9 for r in ok)
+    close = [i for i, g in enumerate(gap) if abs(g) <= 1]
+    far = [i for i, g in enumerate(gap) if g > 1]
+    names = [r["name"] for r in ok]
+    flat = sum(not np.isfinite(r["flat_cm"]).all() for r in ok)
     return (
         "Reading. The refinement puts the whole session behind the arm (camera rays, the IMU "
         "with its orientation error and bias, the arm constraint, as the arm smoother sees "
@@ -227,13 +235,16 @@ def reading(ok: list[dict]) -> str:
         f"fit alone missed by up to {max(fit):.1f} cm, and the wrist follows (auto / declared "
         f"median {np.median(ratio):.1f}, from {np.median(ratio_fit):.1f} with the sphere fit's "
         f"arm). It does not reach the wrist goal, and the likelihood says why. The arm "
-        "smoother's log-likelihood at the true arm and at the estimate differ by "
-        f"{min(gap):+.2f} to {max(gap):+.2f}, far less than one unit: the data do not tell them "
-        f"apart, though they are {min(sh):.1f}-{max(sh):.1f} cm apart at the shoulder and the "
-        "estimate's wrist RMSE is up to "
-        f"{max(ratio):.1f}× the declared arm's. The search on the profile likelihood "
+        "smoother's log-likelihood at the true arm less that at the estimate is "
+        f"{min(gap):+.2f} to {max(gap):+.2f}; on the {len(close)} sessions where it is within "
+        "±1 the data do not tell the two apart, though they are "
+        f"{_span([sh[i] for i in close])} cm apart at the shoulder and the estimate's wrist "
+        f"RMSE is {_span([ratio[i] for i in close], '×')} the declared arm's"
+        + (f"; on {len(far)} ({', '.join(names[i] for i in far)}) the truth is more likely by "
+           "more than 1, so the static-state Gauss–Newton stopped short of the likelihood's "
+           "maximum there" if far else "") + ". The search on the profile likelihood "
         f"(quadratic fits at 2-SD steps about the estimate) found a higher point on {moved} of "
-        f"{len(ok)} sessions, and in at least one direction no curvature at all on most: "
+        f"{len(ok)} sessions, and no curvature in at least one direction on {flat} of them: "
         "there the likelihood is flat to within its convergence noise (~0.1), so no "
         "optimisation of it can do better. The reason is the geometry: the smoother's wrist "
         "lies on the elbow's sphere, and a table-top elbow covers a small cap of that sphere, "
@@ -243,7 +254,7 @@ def reading(ok: list[dict]) -> str:
         "up to 0.17 m/s² of gravity, the size of the tasks' own accelerations) and the camera "
         "cannot either. The wrist goal (within 20 % of the declared arm's 0.1-0.4 cm) needs "
         "the shoulder to a few millimetres, which the likelihood does not hold. The lengths' "
-        "SDs (L1's 2-5 cm) say the data hardly fix them: the estimates sit near the weak "
+        f"SDs (L1's {_span([r['sd'][3] for r in ok])} cm) say the data hardly fix them: the estimates sit near the weak "
         "anthropometric prior (fuse/arm_auto.py: 0.30 and 0.26 m, SD 5 cm), 1 cm from the "
         "simulator's arm, so their meeting the 1 cm goal says little. What would narrow the "
         "ridge is data, not search: tape-measured lengths with `shoulder_m = \"auto\"` (two of "
@@ -271,6 +282,7 @@ def main() -> None:
                 rows.append((name, session_row(folder, s)))
             except ArmtrackError as e:  # a stage refused: the row says why
                 rows.append((name, {"error": str(e).replace(tmp + "/", "")}))
+            rows[-1][1]["name"] = name
             print(line(name, rows[-1][1]), flush=True)
     write(Path(args.out), rows, time.perf_counter() - t0, args.seeds)
     print(f"wrote {args.out}")
