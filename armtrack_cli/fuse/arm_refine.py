@@ -10,11 +10,15 @@ eq. 2), and θ joins its state: x' = (x, θ), θ_k = θ_{k−1} (no process nois
     r = |p − L2 u(δθ) − S| − L1,   ∂r/∂S = −n,  ∂r/∂L1 = −1,  ∂r/∂L2 = −n·u,   n = (E − S)/|E − S|
 
 besides its ∂r/∂p and ∂r/∂δθ (arm_smoother.linearise). Each Gauss–Newton iteration linearises
-about the current trajectory and θ and runs one Kalman filter + RTS pass; for a linear-Gaussian
-model the smoothed θ is the maximiser of the marginal likelihood p(data | θ) times θ's prior,
-and its smoothed covariance the inverse of that log-posterior's curvature, so the SDs are
-those of the profile likelihood (a static state's smoothed covariance is the same at every
-frame). ``log_likelihood`` gives the forward pass's Σ log N(innovation; 0, S) at a fixed arm.
+about the current trajectory and θ and runs one Kalman filter + RTS pass. Were the model linear
+in (x, θ), the smoothed θ would be the maximiser of the marginal likelihood p(data | θ) times
+θ's prior and its smoothed covariance the inverse of that log-posterior's curvature (a static
+state's smoothed covariance is the same at every frame); linearised, it is the joint
+(trajectory, arm) maximum instead. ``log_likelihood`` gives the forward pass's
+Σ log N(innovation; 0, S) at a fixed arm, ``profile_log_likelihood`` log p(data | arm) with
+the trajectory iterated to convergence, and ``maximise_quadratic`` searches it
+(pipeline/arm_model.profile_maximum; validation/arm_auto.py measures the two against each
+other and against the truth: docs/validation-arm-auto.md).
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
-"""`[arm] … = "auto"`: the arm model estimated from the session before fusing
-(fuse/arm_auto.py), and the session with it in place for every stage after fuse."""
+"""`[arm] … = "auto"`: the arm model estimated from the session before fusing (the sphere
+fit, fuse/arm_auto.py, refined by the whole session through the arm smoother, fuse/
+arm_refine.py), and the session with it in place for every stage after fuse."""
 
 from __future__ import annotations
 
