@@ -58,7 +58,8 @@ class Model:
 
 def model(imu: arm_smoother.ImuSamples, t_frames: np.ndarray, x0: np.ndarray, P0: np.ndarray,
           s: FuseSettings) -> Model:
-    """Process and prior as arm_smoother.run builds them (the paper's fixed shoulder)."""
+    """Process and prior as arm_smoother.run builds them (the paper's fixed shoulder; the
+    rest update, off by default, not in it)."""
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
     gyro = s.orientation_model == "gyro" and imu.gyro()
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
