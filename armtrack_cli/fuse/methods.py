@@ -295,7 +295,9 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         if arm is None:
             raise ValueError(f"{method} needs the arm model")
         est = run_particles(inp, x0, P0, proj, s, arm, constrained=True)
-        if method == "pf-constraint" and s.imu_bias_window_s > 0:
+        if method == "pf-constraint" and s.imu_error == "causal":
+            est = run_error_corrected(inp, x0, P0, proj, s, arm, est)
+        elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
             return run_arm_smoother(inp, x0, P0, proj, s, arm,
@@ -318,6 +320,23 @@ def run_bias_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projec
     est = run_particles(replace(inp, steps=imu_bias.corrected(inp.steps, b)), x0, P0, proj, s,
                         arm, constrained=True)
     summary = {"imu_bias_rms_m_s2": round(float(np.sqrt(np.mean(np.sum(b**2, axis=1)))), 4)}
+    return replace(est, summary=summary)
+
+
+def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+                        s: FuseSettings, arm: Arm, first: Estimates) -> Estimates:
+    """pf-constraint again on a_W corrected by the IMU's orientation error and accelerometer
+    bias as a forward Kalman pass estimates them from the data up to each frame, linearised
+    about the first run's estimates (fuse/imu_error.py): still a forward filter."""
+    from armtrack_cli.fuse import imu_error  # numba's: imported only when it runs
+
+    if inp.imu is None or inp.t is None:
+        raise ValueError("imu_error = 'causal' needs the IMU samples and the frame times")
+    th, ba = imu_error.causal_errors(inp, first.mean, x0, P0, proj, s, arm)
+    est = run_particles(replace(inp, steps=imu_error.corrected(inp, inp.steps, th, ba)), x0, P0,
+                        proj, s, arm, constrained=True)
+    summary = {"orientation_error_rms_deg": round(float(np.degrees(np.sqrt(np.mean(np.sum(
+        th**2, axis=1))))), 3), "accel_bias_m_s2": [round(float(v), 4) for v in ba[-1]]}
     return replace(est, summary=summary)
 
 
