@@ -333,8 +333,9 @@ def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Proje
     if inp.imu is None or inp.t is None:
         raise ValueError("imu_error = 'causal' needs the IMU samples and the frame times")
     th, ba = imu_error.causal_errors(inp, first.mean, x0, P0, proj, s, arm)
-    est = run_particles(replace(inp, steps=imu_error.corrected(inp, inp.steps, th, ba)), x0, P0,
-                        proj, s, arm, constrained=True)
+    est = run_particles(replace(inp, steps=imu_error.corrected(inp, inp.steps, th, ba),
+                                q_WB=arm_smoother.corrected(inp.q_WB, th)), x0, P0, proj, s, arm,
+                        constrained=True)
     summary = {"orientation_error_rms_deg": round(float(np.degrees(np.sqrt(np.mean(np.sum(
         th**2, axis=1))))), 3), "accel_bias_m_s2": [round(float(v), 4) for v in ba[-1]]}
     return replace(est, summary=summary)
