@@ -171,6 +171,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
         if seen[k]:  # step 2: weights from the colour-tracking likelihood (eq. 11), gated
             px = proj(x[:, :3])
+            after_blind = run_gated >= s.reacquire_frames  # the first detection after a card
             codes[k], run_gated = robust.gate(
                 robust.pixel_mahalanobis2(px, w, inp.z[k], s.pixel_sigma**2), s.gate_chi2,
                 run_gated, s.reacquire_frames)
@@ -180,7 +181,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
                 px = proj(x[:, :3])
             if codes[k] != robust.GATED:
                 w = _colour_layer(x, px, w, inp.z[k], points[k], codes, k, proj, s, rng,
-                                  constrained)
+                                  constrained, after_blind)
         else:  # no detection: counts toward re-acquiring as a gated one
             run_gated = robust.blind(run_gated)
         used = codes[k] not in (robust.NONE, robust.GATED)
@@ -209,14 +210,16 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
 
 def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
                   points: np.ndarray, codes: np.ndarray, k: int, proj: Projection,
-                  s: FuseSettings, rng: Stream, constrained: bool) -> np.ndarray:
+                  s: FuseSettings, rng: Stream, constrained: bool,
+                  after_blind: bool = False) -> np.ndarray:
     """Step 2's weights w ∝ w⁻ p(z | x) (eq. 11, 14) of the particles x (N, 6) whose pixels
     are px; pf-constraint first re-seeds x in place on the two ray-sphere points if it
-    re-acquires or the weights collapse, and codes[k] says so (fuse/robust.py)."""
+    re-acquires, the weights collapse or ``after_blind`` (the first detection after
+    reacquire_frames frames without one), and codes[k] says so (fuse/robust.py)."""
     inv2s2 = 0.5 / s.pixel_sigma**2
     w_new = weights(-inv2s2 * np.einsum("ij,ij->i", px - z, px - z), w)
     n_seed = int(np.floor(s.reseed_share * x.shape[0] + 0.5))
-    if not constrained or n_seed == 0 or not (codes[k] == robust.REACQUIRED
+    if not constrained or n_seed == 0 or not (codes[k] == robust.REACQUIRED or after_blind
                                                or ess(w_new) < s.reseed_ess * x.shape[0]):
         return w_new
     m, c = moments(x[:, :3], w)  # the predicted cloud, before the colour weights
