@@ -82,8 +82,7 @@ def score(folder: Path, out: Path) -> dict:
     fps = 1.0 / np.median(np.diff(tr["frame_t"]))
     longest = _longest((e > 5.0) & ~hidden)
     lost = bool(np.nanmax(e[~hidden]) > 10.0)
-    det = pd.read_csv(out / "detections.csv", comment="#")["ok"].to_numpy() == 1
-    blind, lag = _longest(~det), _longest(~det & ~hidden)
+    blind, lag = stretches(out / "detections.csv", hidden)
     return {"max_cm": float(w.loc["3d", "max_abs_cm"]), "rmse_cm": float(w.loc["3d", "rmse_cm"]),
             "no_detection_s": blind / fps, "lag_s": lag / fps,
             "within5": float(min(w.loc[a, "within_5cm_pct"] for a in "xyz")),
@@ -130,6 +129,14 @@ def aw_errors(folder: Path) -> dict:
             "causal": rms(imu_error.corrected(inp, inp.steps, th, ba).dv),
             "true": rms(imu_error.corrected(inp, inp.steps, th_true, np.tile(
                 tr["acc_bias"], (inp.t.size, 1))).dv)}
+
+
+def stretches(detections: Path, hidden: np.ndarray) -> tuple[int, int]:
+    """(frames) the longest stretch without a detection and the longest with the patch in view
+    (not ``hidden``) but not detected, from the first detection on (the filter starts there)."""
+    det = pd.read_csv(detections, comment="#")["ok"].to_numpy() == 1
+    start = int(np.argmax(det))
+    return _longest(~det[start:]), _longest(~det[start:] & ~hidden[start:])
 
 
 def _longest(flags: np.ndarray) -> int:
@@ -209,7 +216,8 @@ def report(results: list[dict], wall: float, args) -> str:
              "run loses the arm.", "",
              "Columns: the cards; the longest stretch without a detection (`ok = 0`: a card, the "
              "other arm over the patch, or detect not finding it) and the longest with the patch "
-             "in view but not detected (detect's lag in taking it again); compare's max 3-D error and "
+             "in view but not detected (detect's lag in taking it again), both from the first "
+             "detection on (where the filter starts); compare's max 3-D error and "
              "the worst axis's share within ±5 cm; which goal is missed; from the simulator's "
              "truth, the largest 3-D error while the patch is hidden (card or other arm) and "
              "while it is in view, the longest stretch in view with the error above 5 cm, *lost* "
