@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from armtrack_cli.filters.fast_exp import exp_nonpositive
 from armtrack_cli.filters.splitmix import fill_normals
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
 
@@ -28,29 +29,6 @@ __all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
 
 # error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
 # whose check keeps LLVM from vectorising any loop that divides
-
-# exp(x) for x ≤ 0 in SIMD: x = n ln2 + r, |r| ≤ ln2 / 2 (Cody & Waite's two-part ln2), e^r by
-# its Taylor series to r¹³ (truncation < 5e-18), 2^n from a table; within 1 ulp of np.exp
-# (tests/test_fuse_filters.py), where libm's exp, one call per particle, is 3× slower.
-_LN2_HI, _LN2_LO, _LOG2E = 6.93147180369123816490e-01, 1.90821492927058770002e-10, 1 / np.log(2)
-_EXP_C = 1.0 / np.cumprod(np.r_[1.0, np.arange(1.0, 14.0)])  # 1 / j!, j = 0 … 13
-_POW2 = 2.0 ** -np.arange(1076.0)  # 2^-n, n = 0 … 1075 (2^-1075 rounds to 0)
-
-
-@njit(cache=True, error_model="numpy")
-def exp_nonpositive(x, m, out):
-    """out = exp(x − m) for x (n,) ≤ m (NaN stays NaN; below −745, where exp is 0, 0); out
-    must not be x (the loop is vectorised only for distinct arrays)."""
-    for i in range(x.size):
-        v = x[i] - m
-        v = max(v, -745.0) if v == v else v
-        n = np.rint(v * _LOG2E)
-        r = (v - n * _LN2_HI) - n * _LN2_LO
-        p = _EXP_C[13]
-        for j in range(12, -1, -1):
-            p = p * r + _EXP_C[j]
-        out[i] = p * _POW2[np.intp(-n)] if v == v else v
-
 
 @njit(cache=True, error_model="numpy")
 def _max(lw):
