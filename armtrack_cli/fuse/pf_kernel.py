@@ -45,18 +45,28 @@ def _max(lw):
 
 @njit(cache=True, error_model="numpy")
 def _normalise(lw, w):
-    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form); uniform if every lw = −inf, or
-    if one is NaN (as the reference, whose max is then NaN)."""
+    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form) as particles.weights: × 1 / Σ,
+    not ÷ Σ (a multiply, where a divide is eight times slower); uniform if every lw = −inf,
+    or if one is NaN (as the reference, whose max is then NaN). Returns Σ w_i² (1 / ESS)."""
     m = _max(lw)
     n = lw.size
     if np.isfinite(m):
         exp_nonpositive(lw, m, w)
         s = _total(w)
         if np.isfinite(s):
-            for i in range(n):
-                w[i] /= s
-            return
+            return _scale_sum_sq(w, 1.0 / s)
     w[:] = 1.0 / n
+    return _sum_sq(w)
+
+
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _scale_sum_sq(w, c):
+    """w ← c w; returns Σ w_i²."""
+    ss = 0.0
+    for i in range(w.size):
+        w[i] *= c
+        ss += w[i] * w[i]
+    return ss
 
 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
@@ -266,24 +276,24 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
                     constrained, w_prior, xr, seed_eps, m6, c6):
     """methods.run_particles' step 2 after the gate (fuse/robust.py): the χ² gate on the
     predicted pixels px, then (unless gated) w ∝ w⁻ p(z | x), roughened first if it
-    re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated)."""
+    re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated, Σ w²)."""
     points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
     codes[k], run_gated = _gate_code(_pixel_mahalanobis2(px, w, z, r2), gate, run_gated,
                                      reacquire)
     if codes[k] == 2:
-        return False, run_gated
+        return False, run_gated, 0.0
     w_prior[:] = w
     if codes[k] == 3:  # re-acquired: spread the cloud first (xr: work)
         _roughen(xs, rough, state, xr)
         _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
-    _normalise(lw, w)
+    ss = _normalise(lw, w)
     N = w.size
-    if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / _sum_sq(w) < reseed_ess * N):
+    if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / ss < reseed_ess * N):
         _reseed(xs, w_prior, points[k], reseed_sigma, prior_m, state, seed_eps, m6, c6, xr)
         codes[k] = 4 if codes[k] == 1 else codes[k]
         _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
-        _normalise(lw, w)
-    return True, run_gated
+        ss = _normalise(lw, w)
+    return True, run_gated, ss
 
 
 @njit(cache=True, error_model="numpy")
@@ -307,20 +317,20 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     idx = np.empty(N, np.int64)
     work, start = np.empty((3, N)), np.empty(2 * N + 2, np.int64)
     uniform = True  # every w_i is exactly 1/N
-    run_gated = 0
+    run_gated, ss = 0, 0.0
     for k in range(n_frames):
         fill_normals(state, eps)  # the reference's eps (12, N)
         seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
                                   uniform, lw, px)
         if seen:  # the χ² gate, roughening and re-seeding
-            seen, run_gated = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw, px,
-                                              codes, run_gated, guard, constrained, w_prior,
-                                              xr, seed_eps, m6, c6)
+            seen, run_gated, ss = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw,
+                                                  px, codes, run_gated, guard, constrained,
+                                                  w_prior, xr, seed_eps, m6, c6)
         elif run_gated >= 0:  # no detection: as a gated one (robust.blind)
             run_gated += 1
         if seen:
             uniform = False
-        n_eff[k] = 1.0 / _sum_sq(w)
+        n_eff[k] = 1.0 / (ss if seen else _sum_sq(w))  # Σ w² from the normalisation
         if constrained:
             if seen:  # step 3 (without a detection the weights are still equal)
                 _resample(w, state, scheme, idx, work, start)

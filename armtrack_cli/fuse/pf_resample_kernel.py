@@ -132,10 +132,11 @@ def _residual(w, s, idx, work, start):
 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _floors(w, total, nw, frac):
-    """nw_i = floor(N w_i / total) and frac_i = N w_i / total − nw_i (SIMD); returns Σ nw."""
-    n, m = w.size, 0.0
+    """nw_i = floor(N w_i / total) and frac_i = N w_i / total − nw_i (SIMD, w_i · (N / total),
+    a multiply as the reference's); returns Σ nw."""
+    n, m, c = w.size, 0.0, w.size / total
     for i in range(n):
-        v = n * (w[i] / total)
+        v = w[i] * c
         f = np.floor(v)
         nw[i], frac[i] = f, v - f
         m += f
