@@ -111,15 +111,28 @@ def fill_normals(s, out):
     ``normals(s, out.shape)``: the fast path for all in SIMD, marking the rejected ones; then
     those (~1.3 %), listed, and their first round (the wedge test, or a new attempt) for all
     in one branch-free loop; the tail and the rare second rounds one at a time."""
+    fill_normals_with(s, out, normals_work(out.size))
+
+
+@njit(cache=True, error_model="numpy")
+def normals_work(n):
+    """The work arrays of fill_normals_with for n normals, made once for many calls."""
+    m = 8 * ((n + 7) // 8)
+    return (np.zeros(m, np.uint8), np.empty(m + 8, np.int64), np.empty(m // 8, np.int64),
+            np.empty(m), np.empty(m, np.bool_))
+
+
+@njit(cache=True, error_model="numpy")
+def fill_normals_with(s, out, work):
+    """fill_normals with its work arrays given (normals_work(out.size))."""
     n = out.size
     base = s[0] + (s[1] + _U1) * _G
-    flat, rejected = out.reshape(n), np.zeros(8 * ((n + 7) // 8), np.uint8)
-    _fast_path(base, flat, rejected)
-    pending = np.empty(rejected.size + 8, np.int64)
-    m = _listed(rejected, pending)
+    rejected, pending, words, x, again = work
+    flat = out.reshape(n)
+    _fast_path(base, flat, rejected[:n])
+    m = _listed(rejected, pending, words)
     if m:
-        x, again = np.empty(m), np.empty(m, np.bool_)
-        _first_round(base, pending[:m], x, again)
+        _first_round(base, pending[:m], x[:m], again[:m])
         for t in range(m):
             i = pending[t]
             flat[i] = x[t]
@@ -134,11 +147,10 @@ def fill_normals(s, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _listed(rejected, pending):
+def _listed(rejected, pending, words):
     """pending[:m] ← the indices where rejected is set; returns m. Without a branch that
     mispredicts: first the words (8 marks each) that hold a mark, then their marks."""
-    marks = rejected.view(np.uint64)
-    words, nw = np.empty(marks.size, np.int64), 0
+    marks, nw = rejected.view(np.uint64), 0
     for b in range(marks.size):
         words[nw] = b
         nw += np.int64(marks[b] != 0)

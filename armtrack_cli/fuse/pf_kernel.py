@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from armtrack_cli.filters.fast_exp import exp_nonpositive
-from armtrack_cli.filters.splitmix import fill_normals
+from armtrack_cli.filters.splitmix import fill_normals, fill_normals_with, normals_work
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
 
 __all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
@@ -159,18 +159,16 @@ def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uni
     if not (np.isfinite(z[0]) and np.isfinite(z[1])):
         return False
     ct, dt5, z0, z1 = _camera_tuple(cam), _dist_tuple(dist), z[0], z[1]  # in registers
+    log_w0 = np.log(w[0])  # a uniform prior: one log for all, in the same pass
     for i in range(n):
         u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
         px[0, i], px[1, i] = u, v
         eu, ev = u - z0, v - z1
-        lw[i] = -inv2s2 * (eu * eu + ev * ev)
-    if uniform:  # a uniform prior: one log for all
-        log_w0 = np.log(w[0])
-        for i in range(n):
-            lw[i] += log_w0
-    else:
-        for i in range(n):
-            lw[i] += np.log(w[i])
+        lw[i] = -inv2s2 * (eu * eu + ev * ev) + log_w0
+    if not uniform:
+        for i in range(n):  # (plain pf between resamplings): log w_i each
+            eu, ev = px[0, i] - z0, px[1, i] - z1
+            lw[i] = -inv2s2 * (eu * eu + ev * ev) + np.log(w[i])
     return True
 
 
@@ -311,6 +309,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     xs, xr = np.ascontiguousarray(x.T), np.empty((6, N))
     w, lw = np.full(N, 1.0 / N), np.empty(N)
     eps = np.empty((12 if constrained else 6, N))
+    nwork = normals_work(eps.size)
     codes = np.zeros(n_frames, np.int8)
     w_prior, px = np.empty(N), np.empty((2, N))
     seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
@@ -319,7 +318,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     uniform = True  # every w_i is exactly 1/N
     run_gated, ss = 0, 0.0
     for k in range(n_frames):
-        fill_normals(state, eps)  # the reference's eps (12, N)
+        fill_normals_with(state, eps, nwork)  # the reference's eps (12, N)
         seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
                                   uniform, lw, px)
         if seen:  # the χ² gate, roughening and re-seeding
