@@ -25,7 +25,7 @@ from armtrack_cli.filters.fast_exp import exp_nonpositive
 from armtrack_cli.filters.splitmix import fill_normals, fill_normals_with, normals_work
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
 
-__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
+__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "fill_normals_with", "normals_work", "run"]
 
 # error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
 # whose check keeps LLVM from vectorising any loop that divides
