@@ -155,8 +155,8 @@ def _listed(rejected, pending, words):
         words[nw] = b
         nw += np.int64(marks[b] != 0)
     m = 0
-    for b in words[:nw]:
-        for i in range(8 * b, 8 * b + 8):
+    for t in range(nw):
+        for i in range(8 * words[t], 8 * words[t] + 8):
             pending[m] = i
             m += np.int64(rejected[i])
     return m

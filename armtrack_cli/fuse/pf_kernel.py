@@ -354,6 +354,6 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _sum_sq(w):
     s = 0.0
-    for v in w:
-        s += v * v
+    for i in range(w.size):  # by index: LLVM vectorises this, not numba's array iterator
+        s += w[i] * w[i]
     return s

@@ -168,6 +168,6 @@ def _take(xs, idx, out):
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _total(w):
     s = 0.0
-    for v in w:
-        s += v
+    for i in range(w.size):  # by index: LLVM vectorises this, not numba's array iterator
+        s += w[i]
     return s
