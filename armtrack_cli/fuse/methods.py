@@ -342,6 +342,10 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
         summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
             sh - arm.shoulder, axis=1).max()), 4)
+        ell = r.x[:, arm_smoother.drift_slice(r.x.shape[1]).start]
+        summary["upper_arm_change_m"] = [round(float(v), 4) for v in (ell.min(), ell.max())]
+    if s.rest_velocity_sd_m_s > 0:
+        summary["frames_at_rest"] = int(arm_smoother.resting(inp.imu, inp.t, inp.z, s).sum())
     return Estimates(r.x[:, :6], r.P[:, :6, :6], None, q_WB=r.q_WB, elbow_cov=r.elbow_cov,
                      summary=summary)
 
