@@ -153,17 +153,18 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
     """SD of every measure over draws from the posterior (uncertainty.py)."""
     if inp.wrist_sd is None and inp.angles_sd is None:
         return {}
-    e_w = smooth_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else None
+    none = iter(lambda: None, 0)  # no posterior for this input: None for every draw
+    e_w = smooth_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else none
     e_a = (smooth_draws(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
-           if inp.angles_sd is not None else None)
+           if inp.angles_sd is not None else none)
     draws = []
-    for i in range(s.draws):
+    for _, ew, ea in zip(range(s.draws), e_w, e_a):
         d = inp
-        if e_w is not None:  # the elbow is the wrist moved by a known vector: the same error
-            d = replace(d, wrist=inp.wrist + e_w[i],
-                        elbow=None if inp.elbow is None else inp.elbow + e_w[i])
-        if e_a is not None:
-            d = replace(d, wrist_angles=inp.wrist_angles + e_a[i])
+        if ew is not None:  # the elbow is the wrist moved by a known vector: the same error
+            d = replace(d, wrist=inp.wrist + ew,
+                        elbow=None if inp.elbow is None else inp.elbow + ew)
+        if ea is not None:
+            d = replace(d, wrist_angles=inp.wrist_angles + ea)
         draws.append(values(d, s, windows)[0])
     return {k: spread([dr.get(k, "") for dr in draws]) for k in keys}
 
