@@ -62,7 +62,7 @@ def tiled_session(copies: int, base_minutes: float = 10, env=None) -> Path:
     (wrapping) packet counters: the simulated arm starts and ends each copy at rest at the
     same place, so the motion is continuous; the IMU's slowly wandering orientation error and
     its noise restart with each copy (a jump of a fraction of a degree)."""
-    base = long_session(base_minutes, env=env)
+    base = long_session(float(base_minutes), env=env)
     folder = base.with_name(f"tiled-{copies}x{base_minutes:g}")
     if (folder / "session.toml").exists():
         return folder

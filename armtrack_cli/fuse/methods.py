@@ -261,13 +261,14 @@ def load_kernels(method: str) -> None:
     if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint", "arm-smoother"):
         return
     if method == "arm-smoother":
-        from armtrack_cli.fuse.smoother_kernel import smooth as smoother_pass
+        from armtrack_cli.fuse.smoother_blocks import smooth_blocked
 
         d, n = 12, 2
         e = np.tile(np.eye(d), (n, 1, 1))
-        smoother_pass(np.zeros(d), np.eye(d), e, np.zeros((n, d)), e, np.zeros((n, 2, d)),
-                      np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
-                      np.ones(n, bool), 1.0, 13.8)
+        prob = (e, np.zeros((n, d)), e, np.zeros((n, 2, d)), np.zeros((n, 2)), np.ones(n, bool),
+                np.zeros((n, d)), np.zeros(n), np.ones(n, bool))
+        smooth_blocked(np.zeros(d), np.eye(d), lambda lo, hi: tuple(a[lo:hi] for a in prob), n,
+                       rc=1.0, rk=1.0, gate=13.8, keep=lambda *a: None, block=1)
         method = "pf-constraint"
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
