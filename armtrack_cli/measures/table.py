@@ -65,22 +65,27 @@ def _try(f: Callable[[], float]) -> Value:
 
 
 def _path_values(t, p, v, fs: float, reach: bool, s: Settings) -> dict[str, Value]:
+    try:  # onset and offset once for every measure that needs them
+        span: tuple[int, int] | None = path.onset_offset(v, s)
+    except NotComputable:
+        span = None  # each measure below says why
+
     def moving() -> np.ndarray:
-        a, b = path.onset_offset(v, s)
+        a, b = span or path.onset_offset(v, s)
         return v[a:b + 1]
 
     out = {
         "wrist_peak_speed": _try(lambda: v[path.peak(v, s)]),
-        "wrist_mean_speed": _try(lambda: path.mean_speed(v, s)),
-        "time_to_peak_speed": _try(lambda: path.time_to_peak(t, v, s)),
-        "movement_time": _try(lambda: path.movement_time(t, v, s)),
-        "wrist_path_length": _try(lambda: path.path_length(p, v, s)),
+        "wrist_mean_speed": _try(lambda: path.mean_speed(v, s, span=span)),
+        "time_to_peak_speed": _try(lambda: path.time_to_peak(t, v, s, span=span)),
+        "movement_time": _try(lambda: path.movement_time(t, v, s, span=span)),
+        "wrist_path_length": _try(lambda: path.path_length(p, v, s, span=span)),
         "movement_units": _try(lambda: smoothness.movement_units(t, moving(), s)[0]),
         "sparc": _try(lambda: smoothness.sparc(moving(), fs, s)),
         "ldlj": _try(lambda: smoothness.ldlj(moving(), fs)),
     }
     if reach:
-        out["straightness"] = _try(lambda: path.straightness(p, v, s))
+        out["straightness"] = _try(lambda: path.straightness(p, v, s, span=span))
     return out
 
 
