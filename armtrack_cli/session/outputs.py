@@ -126,9 +126,12 @@ def _float_csv(table: pd.DataFrame, float_format: str) -> str:
     % per row instead of one per cell (a 60-minute trajectory has 3 million cells): the same
     % formatting, NaN as an empty cell."""
     row = ",".join([float_format] * table.shape[1])
-    body = "\n".join(row % tuple(r) for r in table.to_numpy().tolist())
-    body = _NAN_CELL.sub("", body)
-    return ",".join(map(str, table.columns)) + "\n" + body + ("\n" if len(table) else "")
+    a = table.to_numpy()
+    text = [",".join(map(str, table.columns)) + "\n"]
+    for lo in range(0, len(a), 4096):  # a block of rows at a time: bounded Python objects
+        text.append(_NAN_CELL.sub("", "".join(row % tuple(r) + "\n"
+                                              for r in a[lo:lo + 4096].tolist())))
+    return "".join(text)
 
 
 _NAN_CELL = re.compile(r"(?<![^,\n])nan(?![^,\n])")  # a whole cell "nan"
