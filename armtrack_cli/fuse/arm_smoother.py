@@ -209,7 +209,7 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
             Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed)
             return F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi]
 
-        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray) -> None:
+        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, Xn=Xn) -> None:
             Xn[lo:hi], P_pv[lo:hi] = xs, Ps[:, :6, :6]
             elbow_cov[lo:hi] = _elbow_cov(q_hat[lo:hi], xs, Ps, arm)
 
