@@ -145,20 +145,22 @@ def test_linearised_rows_match_finite_differences(drifting):
     proj = _camera()
     arm = models.Arm(shoulder=np.array([0.0, 0.3, 0.35]), L1=0.3, L2=0.28,
                      forearm_B=np.array([1.0, 0, 0]))
-    n, d = 4, 15 if drifting else 12
+    n, d = 4, 16 if drifting else 12  # drifting: (ℓ, S) at 12:16
     X = np.zeros((n, d))
     X[:, :3] = [0.25, 0.2, 0.1] + 0.03 * rng.standard_normal((n, 3))
     X[:, 6:9] = 0.01 * rng.standard_normal((n, 3))
     if drifting:
-        X[:, 12:15] = arm.shoulder + 0.01 * rng.standard_normal((n, 3))
+        X[:, 13:16] = arm.shoulder + 0.01 * rng.standard_normal((n, 3))
     q = quat.normalize(rng.standard_normal((n, 4)))
+    if drifting:
+        X[:, 12] = 0.02 * rng.standard_normal(n)  # ℓ, the upper arm's length change
     z = proj(X[:, :3]) + 1.0
     Hc, zc, Hk, zk = arm_smoother.linearise(X, z, q, proj, arm, None if drifting else arm.shoulder)
 
     def residuals(Y):
         u = arm_smoother.forearm(q, Y[:, 6:9], arm)
-        S = Y[:, 12:15] if drifting else arm.shoulder
-        return proj(Y[:, :3]), np.linalg.norm(Y[:, :3] - arm.L2 * u - S, axis=1) - arm.L1
+        S, ell = (Y[:, 13:16], Y[:, 12]) if drifting else (arm.shoulder, 0.0)
+        return proj(Y[:, :3]), np.linalg.norm(Y[:, :3] - arm.L2 * u - S, axis=1) - arm.L1 - ell
 
     h0, r0 = residuals(X)
     assert np.abs(zc - (z - h0 + np.einsum("kij,kj->ki", Hc, X))).max() < 1e-9
@@ -173,9 +175,11 @@ def test_linearised_rows_match_finite_differences(drifting):
 
 def test_process_is_gauss_markov_with_the_stated_spread():
     """δθ's stationary SD is orientation_sd_deg (tilt) and heading_sd_deg (about z) whatever
-    the frame interval; the shoulder's likewise, about the declared shoulder."""
+    the frame interval; the drifting arm's (ℓ, S) are random walks: unchanged in the mean,
+    their variance grown by rate² × dt, starting at the declared arm with the stated SDs."""
     s = FuseSettings(orientation_sd_deg=0.8, heading_sd_deg=1.2, orientation_tau_s=1.5,
-                     shoulder_sd_m=0.02)
+                     shoulder_sd_m=0.02, shoulder_walk_m_s=0.01, upper_arm_sd_m=0.03,
+                     upper_arm_walk_m_s=0.02)
     t, q, f = _imu(np.random.default_rng(6))
     fd = imu_fold.fold(t, q, f, np.arange(0.1, 2.9, 1 / 30))
     S0 = np.array([0.1, 0.2, 0.3])
@@ -184,9 +188,15 @@ def test_process_is_gauss_markov_with_the_stated_spread():
     k = 5
     assert np.allclose(F[k, 6:9, 6:9] @ var @ F[k, 6:9, 6:9].T + Q[k, 6:9, 6:9], var,
                        rtol=1e-12, atol=0)
-    assert np.allclose(F[k, 12:15, 12:15] @ S0 + b[k, 12:15], S0, rtol=1e-12)
-    assert np.allclose(F[k, 12:15, 12:15] @ (4e-4 * np.eye(3)) @ F[k, 12:15, 12:15].T
-                       + Q[k, 12:15, 12:15], 4e-4 * np.eye(3), rtol=1e-12)
+    x = np.r_[np.zeros(12), 0.01, S0]
+    assert F.shape[1:] == (16, 16)
+    assert np.allclose((F[k] @ x + b[k])[12:], x[12:], rtol=1e-12)
+    dt = fd.dt[k]
+    assert np.allclose(Q[k, 12:, 12:], np.diag([0.02**2] + [0.01**2] * 3) * dt, rtol=1e-12)
+    assert np.allclose(Q[k, 12:, :12], 0.0)
+    m, P = arm_smoother.prior(np.zeros(6), np.eye(6) * 1e-4, s, S0)
+    assert np.allclose(m[12:], x[12:] - [0.01, 0, 0, 0])
+    assert np.allclose(np.diag(P)[12:], [0.03**2] + [0.02**2] * 3)
 
 
 def _turning(t, bias):
@@ -239,3 +249,24 @@ def test_without_a_gyro_the_orientation_error_is_gauss_markov():
                                   np.tile([0, 0, 9.81], (t.size, 1)), np.full((t.size, 3), np.nan))
     assert not imu.gyro()
     assert arm_smoother.ImuSamples(t, imu.q_WB, imu.f_B, np.zeros((t.size, 3))).gyro()
+
+
+def test_pre_roll_reaches_back_over_the_imu_recorded_before_the_video():
+    """With the rest update on, the smoother starts where the IMU starts (at most pre_roll_s
+    before the first frame), at the video's rate, with no detections and the first pass's
+    start at rest; with it off, nothing is added."""
+    t = np.arange(-0.5, 3.0, 0.01)
+    q = np.tile([1.0, 0, 0, 0], (t.size, 1))
+    imu = arm_smoother.ImuSamples(t, q, np.tile([0, 0, 9.81], (t.size, 1)), np.zeros((t.size, 3)))
+    tf = np.arange(0, 2, 1 / 30)
+    z = np.full((tf.size, 2), 100.0)
+    first = np.tile([0.1, 0.2, 0.3, 0.01, 0.02, 0.03], (tf.size, 1))
+    on = FuseSettings(rest_velocity_sd_m_s=0.01, pre_roll_s=1.0)
+    m, t2, z2, q2, first2 = arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, on)
+    assert m == 15  # 0.5 s of IMU before the video, at 30 frames/s
+    np.testing.assert_allclose(t2[:m], -0.5 + np.arange(15) / 30, atol=1e-12)
+    assert np.isnan(z2[:m]).all() and np.array_equal(z2[m:], z) and np.isfinite(q2).all()
+    np.testing.assert_allclose(first2[:m], [[0.1, 0.2, 0.3, 0, 0, 0]] * m)
+    short = FuseSettings(rest_velocity_sd_m_s=0.01, pre_roll_s=0.2)
+    assert arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, short)[0] == 6
+    assert arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, FuseSettings())[0] == 0

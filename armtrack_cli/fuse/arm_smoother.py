@@ -1,36 +1,37 @@
 """The orientation-aware arm smoother (method ``arm-smoother``): the wrist (p, v), the IMU's
 orientation error δθ and accelerometer bias b_a (and, with ``shoulder = "drifting"``, the
-shoulder S) estimated over the whole session at once, as a Gauss–Newton iterated extended
+drifting arm: the upper arm's length change ℓ and the shoulder S) estimated over the whole
+session at once, as a Gauss–Newton iterated extended
 Kalman smoother. Equations and their derivation: docs/fusion.md.
 
-State, d = 15 (18 with the drifting shoulder):  x = (p, v, δθ, b_a, b_g[, S])  in W, m, m/s,
-rad, m/s², rad/s (b_g in B); d = 12 (15) without a gyroscope, or orientation_model = "gauss-markov".
+State, d = 15 (19 with the drifting shoulder):  x = (p, v, δθ, b_a, b_g[, ℓ, S])  in W, m, m/s,
+rad, m/s², rad/s, m (b_g in B); d = 12 (16) without a gyroscope, or orientation_model =
+"gauss-markov".
   - process (Tao & Hu eqs. 4–6 with both IMU errors): fuse/imu_fold.py, linear given the IMU;
     δθ changes as the gyroscope says (imu_fold.orientation_track: the output orientation's
     rotation against the gyro's, plus G b_g for the gyro's bias) with a small random walk
     (orientation_walk_deg); without a gyro, first-order Gauss–Markov (SD orientation_sd_deg,
-    time constant orientation_tau_s); b_a, b_g slow random walks; S first-order Gauss–Markov
-    about the declared shoulder;
+    time constant orientation_tau_s); b_a, b_g slow random walks; ℓ and S random walks from
+    the declared arm (``drift_noise``, ``drift_prior``);
   - camera (eq. 7): the patch pixel π(p), σ = pixel_sigma, gated by χ² (gate_chi2);
-  - arm (eq. 15): |p − L2 u − S| − L1 = 0 ± constraint_sigma_m, with the forearm
+  - arm (eq. 15): |p − L2 u − S| − (L1 + ℓ) = 0 ± constraint_sigma_m, with the forearm
     u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
 Each iteration linearises camera and arm about the current smoothed trajectory and runs one
-forward Kalman filter and RTS pass (fuse/smoother_kernel.py, a block of frames at a time so
-that memory does not grow with the session: fuse/smoother_blocks.py); the first trajectory is a robust
+forward Kalman filter and RTS pass (fuse/smoother_kernel.py); the first trajectory is a robust
 first pass (pf-constraint, RTS-smoothed), so the ray–sphere branch is the particles' choice.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse import imu_fold
+from armtrack_cli.fuse import imu_fold, rest
 from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
-from armtrack_cli.fuse.smoother_blocks import smooth_blocked
+from armtrack_cli.fuse.smoother_kernel import smooth
 
 P_, V_, TH, BA, BG = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
 STEP_TOL_M = 1e-5  # Gauss–Newton has converged when no wrist position moves more than this
@@ -53,7 +54,7 @@ class ImuSamples:
 @dataclass(frozen=True)
 class Smoothed:
     x: np.ndarray  # (n, d) smoothed state
-    P: np.ndarray  # (n, 6, 6) the smoothed covariance's (p, v) block
+    P: np.ndarray  # (n, d, d)
     q_WB: np.ndarray  # (n, 4) the corrected orientation R = exp(−[δθ]×) R̂
     elbow_cov: np.ndarray  # (n, 3, 3)
     gated: np.ndarray  # (n,) bool, detections not used
@@ -61,9 +62,31 @@ class Smoothed:
     gyro: bool  # δθ tracked by the gyroscope (state holds b_g) or Gauss–Markov
 
 
+DRIFT = 4  # the drifting arm's states, the state's last: ℓ (m), then S (3, m in W)
+
+
 def shoulder_slice(d: int) -> slice:
     """The drifting shoulder's place in a state of size d: always the last three."""
     return slice(d - 3, d)
+
+
+def drift_slice(d: int) -> slice:
+    """The drifting arm's place (ℓ, S) in a state of size d: the last DRIFT."""
+    return slice(d - DRIFT, d)
+
+
+def drift_noise(dt: np.ndarray, s: FuseSettings) -> np.ndarray:
+    """Q (n, 4, 4) of (ℓ, S)'s random walks over steps dt (n,) s: the upper arm's length and
+    each axis of the shoulder change by upper_arm_walk_m_s and shoulder_walk_m_s per √s."""
+    rate = np.array([s.upper_arm_walk_m_s] + [s.shoulder_walk_m_s] * 3) ** 2
+    return dt[:, None, None] * np.diag(rate)
+
+
+def drift_prior(shoulder: np.ndarray, s: FuseSettings) -> tuple[np.ndarray, np.ndarray]:
+    """(ℓ, S) at the first frame: the declared arm (ℓ = 0, S = the declared shoulder), as
+    uncertain as a lab's declaration (upper_arm_sd_m, shoulder_sd_m per axis)."""
+    sd = np.array([s.upper_arm_sd_m] + [s.shoulder_sd_m] * 3)
+    return np.r_[0.0, shoulder], np.diag(sd**2)
 
 
 def orientation_var(s: FuseSettings) -> np.ndarray:
@@ -77,7 +100,7 @@ def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """F (n, d, d), b (n, d), Q (n, d, d) of the augmented state's steps (index 0 unused);
     with ``track`` (the gyro's) δθ follows it and the state holds the gyro bias b_g."""
-    n, d = fd.dt.size, 12 + 3 * (track is not None) + 3 * (shoulder is not None)
+    n, d = fd.dt.size, 12 + 3 * (track is not None) + DRIFT * (shoulder is not None)
     dt = fd.dt[:, None, None]
     eye = np.eye(3)
     F = np.tile(np.eye(d), (n, 1, 1))
@@ -99,12 +122,8 @@ def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
         F[:, TH, TH] = phi * eye
         Q[:, TH, TH] = orientation_var(s) * (1 - phi**2)
     Q[:, BA, BA] = s.accel_bias_walk**2 * dt * eye
-    if shoulder is not None:
-        SH = shoulder_slice(d)
-        phs = np.exp(-dt / s.shoulder_tau_s)
-        F[:, SH, SH] = phs * eye
-        b[:, SH] = (1 - phs[:, 0]) * shoulder
-        Q[:, SH, SH] = s.shoulder_sd_m**2 * (1 - phs**2) * eye
+    if shoulder is not None:  # (ℓ, S): random walks (F = I, b = 0)
+        Q[:, drift_slice(d), drift_slice(d)] = drift_noise(fd.dt, s)
     return F, b, Q
 
 
@@ -142,7 +161,7 @@ def linearise(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection,
     """Camera rows (Hc (n, 2, d), zc (n, 2)) and arm row (Hk (n, d), zk (n,)) linearised about
     the trajectory X (n, d): h(x) ≈ h(x̄) + H (x − x̄), written as z' = H x with
     z' = z − h(x̄) + H x̄ (camera) and z' = H x̄ − r(x̄) (arm, whose measurement is r = 0).
-    ``shoulder`` None: the shoulder is the state's last three (drifting)."""
+    ``shoulder`` None: the drifting arm, the state's last four (ℓ, S)."""
     n, d = X.shape
     p = X[:, P_]
     Hc = np.zeros((n, 2, d))
@@ -150,6 +169,7 @@ def linearise(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection,
     zc = np.where(np.isfinite(z), z, 0.0) - proj(p) + np.einsum("kij,kj->ki", Hc, X)
     u = forearm(q_hat, X[:, TH], arm)
     S = X[:, shoulder_slice(d)] if shoulder is None else np.broadcast_to(shoulder, p.shape)
+    L1 = arm.L1 + (X[:, d - DRIFT] if shoulder is None else 0.0)  # L1 + ℓ
     e = p - arm.L2 * u - S  # E − S (eq. 15)
     dist = np.linalg.norm(e, axis=1)
     nvec = e / dist[:, None]
@@ -158,15 +178,17 @@ def linearise(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection,
     Hk[:, TH] = -arm.L2 * np.cross(nvec, u)  # ∂u/∂δθ = [u]×: nᵀ[u]× = (n × u)ᵀ
     if shoulder is None:
         Hk[:, shoulder_slice(d)] = -nvec
-    zk = np.einsum("kj,kj->k", Hk, X) - (dist - arm.L1)
+        Hk[:, d - DRIFT] = -1.0
+    zk = np.einsum("kj,kj->k", Hk, X) - (dist - L1)
     return Hc, zc, Hk, zk
 
 
 def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
           shoulder: np.ndarray | None, gyro: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The first frame's prior: (p, v) as the other methods start, δθ, b_a (, b_g) about
-    zero, S about the declared shoulder."""
-    d = 12 + 3 * gyro + 3 * (shoulder is not None)
+    zero, (ℓ, S) about the declared arm (``drift_prior``), and then the first wrist, which
+    the pipeline placed on the declared sphere, as uncertain as that sphere."""
+    d = 12 + 3 * gyro + DRIFT * (shoulder is not None)
     m, P = np.zeros(d), np.zeros((d, d))
     m[:6], P[:6, :6] = x0, P0
     P[TH, TH] = orientation_var(s)
@@ -174,9 +196,35 @@ def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
     if gyro:
         P[BG, BG] = np.deg2rad(s.gyro_bias_sd_deg_s) ** 2 * np.eye(3)
     if shoulder is not None:
-        SH = shoulder_slice(d)
-        m[SH], P[SH, SH] = shoulder, s.shoulder_sd_m**2 * np.eye(3)
+        DR = drift_slice(d)
+        m[DR], P[DR, DR] = drift_prior(shoulder, s)
+        P[P_, P_] += np.trace(P[DR, DR]) * np.eye(3)  # the sphere's (ℓ, S) spread, any way
     return m, P
+
+
+def resting(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, s: FuseSettings,
+            video_from: int = 0) -> np.ndarray:
+    """(n,) bool: frames given a zero velocity (fuse/rest.py); none when rest_velocity_sd_m_s
+    is 0 or the IMU file has no gyroscope. Frames before ``video_from``: the IMU's alone."""
+    if s.rest_velocity_sd_m_s <= 0 or not imu.gyro():
+        return np.zeros(t_frames.size, bool)
+    return rest.rest_frames(imu.t, imu.f_B, imu.w_B, t_frames, z, video_from=video_from)
+
+
+def pre_roll(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
+             first: np.ndarray, s: FuseSettings):
+    """Steps at the video's rate before its first frame, back over the IMU recorded before it
+    (at most pre_roll_s; none when the rest update is off, the only thing that gives them
+    weight): their times, no detections, the IMU orientation, the first pass's start at rest.
+    A trial that starts moving leaves its first frame's velocity to the IMU's integral from
+    a hand at rest, instead of a 5 cm/s prior the camera cannot correct along its ray."""
+    dt = float(np.median(np.diff(t_frames)))
+    span = min(s.pre_roll_s, t_frames[0] - imu.t[0]) if s.rest_velocity_sd_m_s > 0 else 0.0
+    m = int(np.floor(span / dt + 1e-9))
+    tp = t_frames[0] - dt * np.arange(m, 0, -1)
+    fp = np.tile(np.r_[first[0, :3], 0.0, 0.0, 0.0], (m, 1))
+    return (m, np.r_[tp, t_frames], np.vstack([np.full((m, 2), np.nan), z]),
+            np.vstack([quat.interpolate(imu.t, imu.q_WB, tp), q_hat]), np.vstack([fp, first]))
 
 
 def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
@@ -185,52 +233,38 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     """Smooth the session: frames at t_frames (n,) s with detections z (n, 2) px (NaN = none),
     the IMU orientation q_hat (n, 4) at each frame, ``first`` (n, 6) the first pass's (p, v)."""
     shoulder = np.asarray(arm.shoulder, float) if s.shoulder == "drifting" else None
+    m_pre, t_frames, z, q_hat, first = pre_roll(imu, t_frames, z, q_hat, first, s)
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
     period = float(np.median(np.diff(imu.t)))
     gyro = s.orientation_model == "gyro" and imu.gyro()
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
+    F, b, Q = process(fd, s, shoulder, period, track)
     m0, Pm0 = prior(x0, P0, s, shoulder, gyro)
-    n, d = t_frames.size, m0.size
-    X = np.zeros((n, d))
+    X = np.zeros((t_frames.size, m0.size))
     X[:, :6] = first
     if shoulder is not None:
-        X[:, shoulder_slice(d)] = shoulder
+        X[:, drift_slice(m0.size)] = m0[drift_slice(m0.size)]
     use_c = np.isfinite(z).all(axis=1)
-    use_k = np.ones(n, bool)
-    sh_fixed = None if shoulder is not None else arm.shoulder
-    P_pv, elbow_cov = np.empty((n, 6, 6)), np.empty((n, 3, 3))
+    use_k = np.ones(t_frames.size, bool)
+    rc, rk = s.pixel_sigma**2, s.constraint_sigma_m**2
+    still = resting(imu, t_frames, z, s, m_pre)
     iterations, step = 0, np.inf
     while iterations < s.smoother_iterations and step >= STEP_TOL_M:
-        Xn = np.empty_like(X)
-
-        def model(lo: int, hi: int, X=X) -> tuple:  # the steps and rows of frames lo … hi − 1
-            F, b, Q = process(_rows(fd, lo, hi), s, shoulder, period,
-                              None if track is None else _rows(track, lo, hi))
-            Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed)
-            return F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi]
-
-        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, Xn=Xn) -> None:
-            Xn[lo:hi], P_pv[lo:hi] = xs, Ps[:, :6, :6]
-            elbow_cov[lo:hi] = _elbow_cov(q_hat[lo:hi], xs, Ps, arm)
-
-        gated = smooth_blocked(m0, Pm0, model, n, rc=s.pixel_sigma**2,
-                               rk=s.constraint_sigma_m**2,
-                               gate=float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf,  # 0: off
-                               keep=keep)
+        Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm,
+                                   None if shoulder is not None else arm.shoulder)
+        ins = rest.with_rows(still, s.rest_velocity_sd_m_s, rk, F, b, Q, Hc, zc, use_c, Hk,
+                             zk, use_k)
+        F2, b2, Q2, Hc2, zc2, use_c2, Hk2, zk2, use_k2 = ins.arrays
+        Xn, P, gated = smooth(m0, Pm0, F2, b2, Q2, Hc2, zc2, use_c2, rc, Hk2, zk2, use_k2, rk,
+                              float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf)  # 0: off
+        if not ins.real.all():  # drop the zero-velocity steps
+            Xn, P, gated = Xn[ins.real], P[ins.real], gated[ins.real]
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
         X, iterations = Xn, iterations + 1
-    return Smoothed(X, P_pv, corrected(q_hat, X[:, TH]), elbow_cov, gated, iterations, gyro)
-
-
-def _rows(a, lo: int, hi: int):
-    """Frames lo … hi − 1 of a per-frame dataclass (imu_fold.Folded, OrientationTrack)."""
-    return type(a)(**{f.name: getattr(a, f.name)[lo:hi] for f in fields(a)})
-
-
-def _elbow_cov(q_hat: np.ndarray, x: np.ndarray, P: np.ndarray, arm: Arm) -> np.ndarray:
-    """(n, 3, 3) covariance of the elbow E = p − L2 u(δθ) (eq. 2): J P Jᵀ, J = ∂E/∂x."""
-    u = forearm(q_hat, x[:, TH], arm)
-    J = np.zeros((x.shape[0], 3, x.shape[1]))
+    X, P, gated, q_hat = X[m_pre:], P[m_pre:], gated[m_pre:], q_hat[m_pre:]  # the video's
+    u = forearm(q_hat, X[:, TH], arm)
+    J = np.zeros((X.shape[0], 3, X.shape[1]))  # ∂E/∂x, E = p − L2 u(δθ) (eq. 2)
     J[:, :, P_] = np.eye(3)
     J[:, :, TH] = -arm.L2 * imu_fold.skew(u)
-    return J @ P @ np.swapaxes(J, 1, 2)
+    return Smoothed(X, P, corrected(q_hat, X[:, TH]), J @ P @ np.swapaxes(J, 1, 2), gated,
+                    iterations, gyro)

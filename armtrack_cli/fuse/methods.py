@@ -261,14 +261,13 @@ def load_kernels(method: str) -> None:
     if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint", "arm-smoother"):
         return
     if method == "arm-smoother":
-        from armtrack_cli.fuse.smoother_blocks import smooth_blocked
+        from armtrack_cli.fuse.smoother_kernel import smooth as smoother_pass
 
         d, n = 12, 2
         e = np.tile(np.eye(d), (n, 1, 1))
-        prob = (e, np.zeros((n, d)), e, np.zeros((n, 2, d)), np.zeros((n, 2)), np.ones(n, bool),
-                np.zeros((n, d)), np.zeros(n), np.ones(n, bool))
-        smooth_blocked(np.zeros(d), np.eye(d), lambda lo, hi: tuple(a[lo:hi] for a in prob), n,
-                       rc=1.0, rk=1.0, gate=13.8, keep=lambda *a: None, block=1)
+        smoother_pass(np.zeros(d), np.eye(d), e, np.zeros((n, d)), e, np.zeros((n, 2, d)),
+                      np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
+                      np.ones(n, bool), 1.0, 13.8)
         method = "pf-constraint"
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
@@ -343,6 +342,10 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
         summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
             sh - arm.shoulder, axis=1).max()), 4)
+        ell = r.x[:, arm_smoother.drift_slice(r.x.shape[1]).start]
+        summary["upper_arm_change_m"] = [round(float(v), 4) for v in (ell.min(), ell.max())]
+    if s.rest_velocity_sd_m_s > 0:
+        summary["frames_at_rest"] = int(arm_smoother.resting(inp.imu, inp.t, inp.z, s).sum())
     return Estimates(r.x[:, :6], r.P[:, :6, :6], None, q_WB=r.q_WB, elbow_cov=r.elbow_cov,
                      summary=summary)
 

@@ -69,9 +69,16 @@ class FuseSettings:
     accel_bias_walk: float = 0.001  # m/s²/√s, its random walk
     imu_hold: str = "linear"  # IMU between samples: "linear" (first-order hold) or "sample"
     smoother_iterations: int = 10  # Gauss–Newton iterations at most
-    shoulder: str = "fixed"  # "fixed" (Tao & Hu) or "drifting": a shoulder state that wanders
-    shoulder_sd_m: float = 0.03  # … by about this much (per axis) about the declared shoulder
-    shoulder_tau_s: float = 5.0  # … with this correlation time
+    shoulder: str = "fixed"  # "fixed" (Tao & Hu) or "drifting": shoulder and upper-arm length
+    #                          states that start at the declared arm and wander (docs/fusion.md)
+    shoulder_sd_m: float = 0.11  # per axis, how far the declared shoulder may be off …
+    shoulder_walk_m_s: float = 0.011  # … and its random walk, m/√s per axis
+    upper_arm_sd_m: float = 0.06  # how far the declared upper-arm length may be off …
+    upper_arm_walk_m_s: float = 0.023  # … and its random walk, m/√s
+    rest_velocity_sd_m_s: float = 0.0  # > 0: where the hand rests (fuse/rest.py) its velocity is
+    #                                    zero within this SD (m/s, per axis); 0: off
+    pre_roll_s: float = 1.0  # with the rest update: the arm smoother starts this long before the
+    #                          first frame where the IMU recorded before it (fuse/arm_smoother.py)
 
 
 def checked(s: FuseSettings, where: str) -> FuseSettings:

@@ -1,0 +1,99 @@
+"""The hand at rest, from the data, and what rest tells the arm smoother: its velocity is zero.
+
+A camera sees the wrist's depth along its ray only through the arm constraint and the IMU's
+double integral. Over the few seconds of a real trial an accelerometer bias of 0.03 m/s² or a
+1° tilt (a 0.17 m/s² gravity leak) moves that integral by centimetres, and the camera cannot
+see it along the ray. Where the hand rests, as at the start and end of most reaching and
+drinking trials, the whole velocity is zero, along the ray too: a zero-velocity update
+(ZUPT; Foxlin 2005, "Pedestrian tracking with shoe-mounted inertial sensors", IEEE CG&A 25(6))
+pins it, and with it the acceleration error that would otherwise integrate there.
+
+Rest is detected as Skog et al. 2010 ("Zero-velocity detection — an algorithm evaluation",
+IEEE TBME 57(11)) test it — the gyroscope's rate and the specific force's departure from g
+small over a window — and here also the patch still in the image over that window (a hand
+moving slowly and straight can keep the IMU quiet; the camera sees it move).
+
+``with_rows`` hands the zero-velocity rows to the smoother kernel (fuse/smoother_kernel.py,
+which takes one scalar row per step besides the camera's) as zero-length steps inserted
+after each rest frame (F = I, b = 0, Q = 0: the state does not change across them), each
+carrying one axis of v = 0; ``drop`` removes them from the result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from armtrack_cli.fuse.models import GRAVITY_W
+
+G = float(np.linalg.norm(GRAVITY_W))
+V_ = slice(3, 6)  # the velocity's place in the arm smoother's state
+
+
+@dataclass(frozen=True)
+class RestTest:
+    window_s: float = 0.3  # every IMU sample and detection within ±window/2 of the frame
+    gyro_rad_s: float = 0.1  # |ω| below this (a resting hand's tremor: a few 0.01 rad/s)
+    accel_m_s2: float = 0.15  # | |f| − g | below this
+    px: float = 1.5  # the patch's centre moves less than this (max − min, per axis)
+
+
+def _window_all(t: np.ndarray, ok: np.ndarray, centres: np.ndarray, half: float) -> np.ndarray:
+    """For each centre time, whether ok holds at every t within ±half (and t covers it)."""
+    bad = np.r_[0, np.cumsum(~ok)]
+    lo = np.searchsorted(t, centres - half, side="left")
+    hi = np.searchsorted(t, centres + half, side="right")
+    covered = (centres - half >= t[0]) & (centres + half <= t[-1])
+    return covered & (hi > lo) & (bad[hi] - bad[lo] == 0)
+
+
+def rest_frames(t_imu: np.ndarray, f_B: np.ndarray, w_B: np.ndarray, t_frames: np.ndarray,
+                z: np.ndarray, test: RestTest = RestTest(), video_from: int = 0) -> np.ndarray:
+    """(n,) bool: frames at which the hand rests — IMU (t_imu (M,) s, f_B, w_B (M, 3)) quiet
+    and the patch (z (n, 2) px, NaN where not reported) seen and still over the window.
+    Frames before ``video_from`` (the IMU before the video started) have the IMU test only,
+    with a window twice as long."""
+    half = test.window_s / 2
+    quiet = ((np.linalg.norm(w_B, axis=1) < test.gyro_rad_s)
+             & (np.abs(np.linalg.norm(f_B, axis=1) - G) < test.accel_m_s2))
+    rest = _window_all(t_imu, quiet, t_frames, half)
+    rest[:video_from] = _window_all(t_imu, quiet, t_frames[:video_from], 2 * half)
+    tv, zv = t_frames[video_from:], z[video_from:]
+    seen = np.isfinite(zv).all(axis=1)
+    on_video = rest[video_from:] & _window_all(tv, seen, tv, half)
+    for k in np.flatnonzero(on_video):
+        near = np.abs(tv - tv[k]) <= half
+        on_video[k] = bool((np.ptp(zv[near], axis=0) < test.px).all())
+    rest[video_from:] = on_video
+    return rest
+
+
+@dataclass(frozen=True)
+class Inserted:
+    """The smoother's step arrays with the zero-velocity steps inserted, and which are real."""
+
+    arrays: tuple
+    real: np.ndarray  # (n + 3 m,) bool
+
+
+def with_rows(rest: np.ndarray, sd_m_s: float, rk: float, F, b, Q, Hc, zc, use_c, Hk, zk,
+              use_k) -> Inserted:
+    """The kernel's arrays (frames first) with three zero-length steps after each rest frame,
+    carrying v_x, v_y, v_z = 0 ± sd_m_s. The kernel's scalar rows all have variance rk, so
+    each row is scaled by √rk / sd_m_s (a row h, z with variance σ² is h c, z c with c² σ²)."""
+    n, d = F.shape[0], F.shape[1]
+    if not rest.any():  # nothing to insert: the arrays themselves, no copies
+        return Inserted((F, b, Q, Hc, zc, use_c, Hk, zk, use_k), np.ones(n, bool))
+    reps = 1 + 3 * rest.astype(int)
+    idx = np.repeat(np.arange(n), reps)
+    pos = np.arange(idx.size) - np.repeat(np.cumsum(reps) - reps, reps)  # 0 real, 1-3 virtual
+    virt = pos > 0
+    F2, b2, Q2 = F[idx], b[idx], Q[idx]
+    F2[virt], b2[virt], Q2[virt] = np.eye(d), 0.0, 0.0
+    Hk2, zk2 = Hk[idx], zk[idx]
+    Hk2[virt] = 0.0
+    Hk2[virt, V_.start + pos[virt] - 1] = np.sqrt(rk) / sd_m_s
+    zk2[virt] = 0.0
+    arrays = (F2, b2, Q2, Hc[idx], zc[idx], use_c[idx] & ~virt, Hk2, zk2, use_k[idx] | virt)
+    return Inserted(arrays, ~virt)
