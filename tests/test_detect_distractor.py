@@ -87,3 +87,45 @@ def test_covered_share_is_what_the_frames_show(session):
         assert share < 0.05 if covered[i] > 0.98 else share > 0.9, (i, covered[i], share)
         checked += 1
     assert checked >= 25
+
+
+def _reacquire():
+    import importlib
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))
+    return importlib.import_module("reacquire")
+
+
+def test_the_sleeve_gap_agrees_with_the_rendered_cover(session):
+    """validation/reacquire.py's gap between the patch's outline and the other arm (from the
+    3-D truth, projected) against the renderer's own share of the patch under the other arm:
+    a covered frame has the two overlapping, a frame with them 2 px apart is not covered."""
+    _, truth = session
+    gap = _reacquire().sleeve_gap_px(truth)
+    covered = truth["frame_patch_covered"] > 0
+    assert covered.sum() >= 3 and (gap > 2).sum() >= 100
+    assert (gap[covered] <= 1.0).all()
+    assert not covered[gap > 2.0].any()
+
+
+def test_the_patch_is_taken_again_as_soon_as_it_is_clear(session):
+    """After the card and after every pass of the other arm, ok = 1 again within 3 frames of
+    the patch being in clear view (visible, the sleeve more than 5 px away): the detections
+    the forward filter relies on (docs/validation-detect.md has the study)."""
+    folder, truth = session
+    rq = _reacquire()
+    ok, _ = _scored(folder / "armtrack" / "detections.csv", truth)
+    clear = truth["frame_patch_visible"].astype(bool) & (rq.sleeve_gap_px(truth) > rq.CLEAR_PX)
+    ev = [e for e in rq.lags(clear, ok, truth["frame_occluded"].astype(bool)) if e[2] >= 5]
+    assert {e[1] for e in ev} >= {"card", "arm"}
+    assert all(e[3] is not None and e[3] <= 3 for e in ev), ev
+
+
+def test_lags_count_clear_frames_before_the_first_report():
+    """reacquire.lags on a hand-made sequence: causes, stretch lengths and lags."""
+    clear = np.array([1, 1, 1, 0, 0, 1, 1, 1, 1, 0, 1, 1], bool)
+    ok = np.array([0, 1, 1, 0, 0, 0, 0, 1, 1, 0, 0, 0], bool)
+    card = np.array([0, 0, 0, 1, 1, 0, 0, 0, 0, 0, 0, 0], bool)
+    assert _reacquire().lags(clear, ok, card) == [(0, "start", 3, 1), (5, "card", 4, 2),
+                                                   (10, "arm", 2, None)]

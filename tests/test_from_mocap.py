@@ -214,6 +214,7 @@ def test_fuse_with_an_auto_arm_end_to_end(mocap_session, tmp_path):
     assert "arm estimated (shoulder_m, upper_arm_m, forearm_m" in r.output
     est = __import__("json").loads((auto / "armtrack" / "arm-auto.json").read_text())
     assert abs(est["forearm_m"] - 0.25) < 0.03 and est["forearm_sd_m"] > 0
+    assert "refined_by" in est and set(est["sphere_fit"]) >= {"shoulder_m", "forearm_m"}
     assert "estimated (" in run_cli("info", auto).output
 
 

@@ -183,3 +183,30 @@ def test_a_patch_turning_face_on_is_followed():
     area = side**2
     old = [area[k] / np.median(area[k - 8:k]) for k in range(8, n)]
     assert max(old) > 1.3  # the old rule's band is exceeded: this test tells them apart
+
+
+def test_back_at_rest_far_from_where_it_went_then_crossed():
+    """Hidden for 30 frames (1 s: a card) while moving, back at rest 60-70 px from where it was
+    lost (beyond relink_px, within the reach the time allows), then a same-hue bar passes
+    over it twice at rest: every frame it is in clear view is reported (also the rest frames
+    before each crossing: the stretches chain to the one that is taken), never a frame under
+    the bar, all on the patch."""
+    rng = np.random.default_rng(8)
+    moving = path(70, still=5)
+    truth = np.vstack([moving, np.tile(moving[-1], (90, 1))])
+    hidden = np.zeros(160, bool)
+    hidden[40:70] = True
+    bar = np.full(160, np.nan)
+    bar[95:110] = truth[-1, 0] - 110 + 15 * np.arange(15)  # the bar's centre sweeps across
+    bar[130:145] = truth[-1, 0] + 110 - 15 * np.arange(15)
+    items = [([] if hidden[i] else [("square", truth[i], PATCH)])
+             + ([] if np.isnan(bar[i]) else [("bar", (bar[i], truth[i, 1]), OTHER_HUE)])
+             for i in range(160)]
+    d = track([frame(rng, it) for it in items])
+    ok = d[:, 5] == 1
+    assert np.hypot(*(truth[70] - truth[39])) > 50  # back beyond relink_px
+    near = np.abs(np.nan_to_num(bar, nan=1e9) - truth[:, 0]) < 30 + SIDE / 2 + 6
+    assert ok[~hidden & ~near].all()
+    assert not ok[hidden].any()
+    assert not ok[np.abs(np.nan_to_num(bar, nan=1e9) - truth[:, 0]) < 30 + SIDE / 2].any()
+    assert err(d, truth)[ok].max() < 0.5

@@ -136,7 +136,8 @@ def arm_estimate_line(e: dict[str, Any]) -> str:
                                                               e["shoulder_sd_m"]))
     return (f"estimated ({', '.join(e['estimated'])} from {e['from_s']:g}-{e['to_s']:g} s): "
             f"shoulder [{sh}] cm, L1 {e['upper_arm_m'] * 100:.1f}±{e['upper_arm_sd_m'] * 100:.1f} "
-            f"cm, L2 {e['forearm_m'] * 100:.1f}±{e['forearm_sd_m'] * 100:.1f} cm")
+            f"cm, L2 {e['forearm_m'] * 100:.1f}±{e['forearm_sd_m'] * 100:.1f} cm"
+            + ("; refined over the whole session by the arm smoother" if "refined_by" in e else ""))
 
 
 def _models(info) -> list[str]:

@@ -23,6 +23,7 @@ rounds its own); a neighbour touching the patch makes one region, too large to p
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
 from statistics import median
@@ -54,14 +55,16 @@ def trend(values) -> float:
     predicts: the Theil–Sen line of their logarithms (the median of the pairwise slopes,
     clipped to ±MAX_STEP_RATIO per frame; Sen 1968) carried one frame on from each value, and
     the median of those. A steady trend gives the last value times its step; pixel jitter
-    (masses alternating by a few %) and one outlier hardly move it."""
-    v = np.log(np.asarray(values, float))
-    if v.size < 3:
-        return float(np.exp(np.median(v)))
-    i, j = np.triu_indices(v.size, 1)
-    step = float(np.clip(np.median((v[j] - v[i]) / (j - i)), -np.log(MAX_STEP_RATIO),
-                         np.log(MAX_STEP_RATIO)))
-    return float(np.exp(np.median(v + step * np.arange(v.size, 0, -1))))
+    (masses alternating by a few %) and one outlier hardly move it. (Plain Python: at most
+    HISTORY values, where numpy's per-call cost would be most of a tracked frame's time.)"""
+    v = [math.log(x) for x in values]
+    n = len(v)
+    if n < 3:
+        return math.exp(median(v))
+    limit = math.log(MAX_STEP_RATIO)
+    step = min(max(median([(v[j] - v[i]) / (j - i) for i in range(n) for j in range(i + 1, n)]),
+                   -limit), limit)
+    return math.exp(median([x + step * (n - k) for k, x in enumerate(v)]))
 
 
 def aspect_of(rw: float, rh: float) -> float:
@@ -106,9 +109,11 @@ class Reference:
 
     def run(self) -> int:
         """How many of the last accepted frames follow one another without a gap."""
-        f = np.asarray(self.frames)
-        gaps = np.flatnonzero(np.diff(f) != 1)
-        return int(f.size - (gaps[-1] + 1 if gaps.size else 0))
+        f = self.frames
+        k = len(f) - 1
+        while k > 0 and f[k] - f[k - 1] == 1:
+            k -= 1
+        return len(f) - k
 
     def failure(self, seen: Look, s, lost_s: float = 0.0) -> str:
         """'' when ``seen`` looks like the patch under settings ``s``; else what differs. After

@@ -8,19 +8,21 @@ not the image. The window is accepted when its region looks like the patch did
 sub-pixel centroid is reported.
 
 Acquiring (the first frames, and whenever the check fails): the whole frame (its mask guided
-by a half-resolution pass). Every region is followed by its own CamShift window (a
-tracklet), each frame marked by whether it looks like the patch. A tracklet that looks like
-the patch now is taken as the patch when it moves (the patch moves with the arm: a same-hue
-cup on the table never does), or when it appears close to where and soon after the patch was
-lost (it came back at rest). Because detect runs offline, its earlier frames that looked like
-the patch are then reported too. Until then frames are ``ok = 0`` with no position. If
-nothing ever moves, the largest region of the first frame is the patch.
+by a half-resolution pass). Every region is followed as a tracklet (frame to frame, to the
+region nearest where it was heading), each frame marked by whether it looks like the patch. A
+tracklet that looks like the patch now is taken as the patch when it moves (the patch moves
+with the arm: a same-hue cup on the table never does), or when it appears soon after the
+patch was lost, no farther from where it went than the arm can have carried it in the time
+(it came back at rest, after a card). Because detect runs offline, its earlier frames that
+looked like the patch are then reported too, and so are those of the tracklets that lead to
+it (the patch at rest, crossed by the other arm, seen again where it was: one tracklet per
+stretch in view). Until then frames are ``ok = 0`` with no position. If nothing ever moves,
+the largest region of the first frame is the patch.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from statistics import median
 
 import cv2
 import numpy as np
@@ -30,14 +32,16 @@ from armtrack_cli.detect.patch_check import HISTORY, Reference, look
 from armtrack_cli.detect.regions import Regions
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
+RELINK_FRAMES = 3  # a tracklet is taken only once its next frames can vouch for its first
 RELINK_SAME_PX = 10.0  # a region present when the patch was lost is the patch only this close
 _OPEN = np.ones((3, 3), np.uint8)
+TRACK_MASS_STEP = 1.5  # a tracklet's region changing mass by more than this in a frame ends it
 
 
 @dataclass(frozen=True)
 class PatchSettings:
     min_area_px: int = 25  # smallest region taken as a candidate
-    max_jump_px: float = 60.0  # a window moving farther in one frame is a new tracklet
+    max_jump_px: float = 60.0  # a window (a tracklet's region) moving farther in a frame: lost
     lost_fraction: float = 0.7  # region mass below this share of what its trend predicts: lost
     max_growth: float = 1.3  # … above this share: something else joined it: lost
     max_aspect: float = 3.0  # a window longer than this times its width is not the patch
@@ -48,6 +52,7 @@ class PatchSettings:
     move_px: float = 12.0  # a tracklet whose positions spread farther than this moves
     relink_px: float = 40.0  # a still tracklet starting this close to where the patch was lost
     relink_s: float = 2.0  # within this time is the patch come back (at rest)
+    relink_px_per_s: float = 100.0  # … and relink_px grows by this per second it was lost
 
 
 @dataclass
@@ -73,6 +78,13 @@ class Tracklet:
         (u0, v0), (u1, v1) = self.box
         return np.hypot(u1 - u0, v1 - v0) > move_px and self.spread() > move_px
 
+    def heading(self) -> tuple[float, float]:
+        """Where it should be next frame: its last position plus its last step (px)."""
+        u, v = self.rects[-1][:2]
+        if len(self.frames) > 1 and self.frames[-2] == self.frames[-1] - 1:
+            return 2 * u - self.rects[-2][0], 2 * v - self.rects[-2][1]
+        return u, v
+
     def add(self, frame: int, rect, mass: float, seen, good: bool) -> None:
         (cx, cy), (rw, rh), ang = rect
         (u0, v0), (u1, v1) = self.box if self.rects else ((cx, cy), (cx, cy))
@@ -82,6 +94,14 @@ class Tracklet:
         self.masses.append(mass)
         self.looks.append(seen)
         self.good.append(good)
+
+
+def region_rect(regions: Regions, k: int):
+    """CamShift's rotated box and window (whole-image px) of region k alone: its moments on
+    its own pixels, so a neighbour does not stretch it."""
+    x, y, w, h = (int(v) for v in regions.stats[k, :4])
+    (cx, cy), size, ang = cv2.CamShift(regions.mask_of(k), (0, 0, w, h), TERM)[0]
+    return ((cx + x, cy + y), size, ang), (x, y, w, h)
 
 
 def back_projection(hsv: np.ndarray, hist: np.ndarray, low, high) -> np.ndarray:
@@ -216,8 +236,8 @@ class PatchTracker:
 
     # --- acquiring
     def _acquire(self, i: int, bgr: np.ndarray) -> None:
-        if not self.tracklets:
-            self._episode = i  # the first frame of this acquisition
+        if self.last[2] >= self._episode:  # the first frame of this acquisition (the patch
+            self._episode = i  # was seen since the last one began)
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
         if self._hsv is None or self._hsv.shape != bgr.shape:
             self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
@@ -241,29 +261,35 @@ class PatchTracker:
         return not self.ref.failure(seen, self.s, self._lost_s), seen
 
     def _follow(self, i: int, hsv, bp, regions) -> dict[int, Tracklet]:
-        """Carry every tracklet's window one frame; end those that lost or merged."""
+        """Carry every tracklet one frame on to the region nearest where it is heading (its
+        last centroid plus its last step): a tracklet is one connected region, so it is
+        never dragged onto a larger same-hue neighbour, as a CamShift window over the whole
+        frame is. It ends when no region lies within max_jump_px, when its region's mass
+        changes by more than TRACK_MASS_STEP in a frame (merged, or half covered), or when two
+        tracklets reach one region (neither identity can be trusted)."""
         claimed: dict[int, Tracklet] = {}
-        h, w = bp.shape
+        area, cent = regions.stats[:, cv2.CC_STAT_AREA], regions.centroids
+        big = np.flatnonzero(area[1:] >= self.s.min_area_px) + 1
         for tr in self.active:
-            rect, window = cv2.CamShift(bp, tr.window, TERM)
-            (cx, cy), _, _ = rect
-            x, y, ww, wh = window
-            mass = float(cv2.countNonZero(bp[y:y + wh, x:x + ww])) if ww > 0 and wh > 0 else 0.0
-            ref = median(tr.masses[-30:])
-            lab = regions.label_at(cx, cy) if 0 <= cx < w and 0 <= cy < h else 0
-            jump = np.hypot(cx - tr.rects[-1][0], cy - tr.rects[-1][1])
-            if (mass < self.s.min_area_px or mass < self.s.lost_fraction * ref or lab == 0
-                    or jump > self.s.max_jump_px):
+            pu, pv = tr.heading()
+            dist = np.hypot(cent[big, 0] - pu, cent[big, 1] - pv)
+            if big.size == 0 or dist.min() > self.s.max_jump_px:
                 tr.alive = False
                 continue
-            if lab in claimed:  # two windows on one region: neither identity can be trusted
+            lab = int(big[np.argmin(dist)])
+            ratio = float(area[lab]) / tr.masses[-1]
+            if not 1.0 / TRACK_MASS_STEP <= ratio <= TRACK_MASS_STEP:
+                tr.alive = False
+                continue
+            if lab in claimed:
                 claimed[lab].alive = False
                 tr.alive = False
                 continue
+            rect, window = region_rect(regions, lab)
             ok, seen = self._candidate(hsv, regions, lab, rect, window)
             claimed[lab] = tr
             tr.window = window
-            tr.add(i, (seen.centroid, *rect[1:]), mass, seen, ok)
+            tr.add(i, (seen.centroid, *rect[1:]), float(area[lab]), seen, ok)
         return claimed
 
     def _start(self, i: int, hsv, bp, regions, claimed) -> None:
@@ -271,8 +297,7 @@ class PatchTracker:
         for lab in range(1, regions.n):
             if lab in claimed or regions.stats[lab, cv2.CC_STAT_AREA] < self.s.min_area_px:
                 continue
-            x, y, ww, wh = (int(v) for v in regions.stats[lab, :4])
-            rect, window = cv2.CamShift(bp, (x, y, ww, wh), TERM)
+            rect, window = region_rect(regions, lab)
             _, size, ang = rect
             ok, seen = self._candidate(hsv, regions, lab, rect, window)
             tr = Tracklet(len(self.tracklets), window)
@@ -281,12 +306,20 @@ class PatchTracker:
             self.tracklets.append(tr)
             self.active.append(tr)
 
+    def _reach_px(self, gap_frames: int, there: bool) -> float:
+        """How far from where it was last seen the patch may reappear after ``gap_frames``: a
+        region that already looked like the patch when the patch was lost is something else
+        unless it is where the patch was heading (RELINK_SAME_PX); otherwise relink_px, plus
+        what the arm can cover in the time (relink_px_per_s)."""
+        if there:
+            return RELINK_SAME_PX
+        return self.s.relink_px + self.s.relink_px_per_s * gap_frames / self.fps
+
     def _is_patch(self, t: Tracklet) -> bool:
         """It looks like the patch now, and it moves, or it appeared close to where and soon
-        after the patch was lost. A region that already looked like the patch when the patch
-        was lost is something else unless it is where the patch was heading (within
-        RELINK_SAME_PX); one that did not may be the patch, partly hidden then."""
-        if not t.good[-1]:
+        after the patch was lost (_reach_px); one that did not look like it when the patch
+        was lost may be the patch, partly hidden then."""
+        if not t.good[-1] or len(t.frames) < RELINK_FRAMES:
             return False
         if t.moves(self.s.move_px):
             return True
@@ -294,21 +327,45 @@ class PatchTracker:
         if last < 0 or (t.frames[0] - last) / self.fps > self.s.relink_s:
             return False
         there = t.frames[0] == self._episode and t.good[0]  # looked like it as the patch went
-        near = RELINK_SAME_PX if there else self.s.relink_px
-        return np.hypot(t.rects[0][0] - u - self.vel[0], t.rects[0][1] - v - self.vel[1]) <= near
+        return np.hypot(t.rects[0][0] - u - self.vel[0], t.rects[0][1] - v - self.vel[1]) \
+            <= self._reach_px(t.frames[0] - last, there)
+
+    def _chain(self, t: Tracklet) -> list[Tracklet]:
+        """t and the ended tracklets of this acquisition that lead to it, oldest first: the
+        latest that ended before the head began, within relink_s and _reach_px of where the
+        head began, having looked like the patch (the patch seen at rest for a while, then
+        crossed by the other arm, then seen again where it was: each stretch is the patch)."""
+        chain, seen = [t], self.last[2] >= 0  # before the patch was ever seen, none was lost
+        while True:
+            h = chain[-1]
+            u, v = h.rects[0][:2]
+            prev = [d for d in self.tracklets if not d.alive and any(d.good)
+                    and d.frames[-1] < h.frames[0]
+                    and (h.frames[0] - d.frames[-1]) / self.fps <= self.s.relink_s
+                    and np.hypot(d.rects[-1][0] - u, d.rects[-1][1] - v) <= self._reach_px(
+                        h.frames[0] - d.frames[-1], seen and d.frames[0] == self._episode
+                        and d.good[0])]
+            if not prev:
+                return chain[::-1]
+            chain.append(max(prev, key=lambda d: d.frames[-1]))
 
     def _adopt(self, t: Tracklet) -> None:
-        """Report the tracklet's frames as the patch and track it from its last window. Its
-        frames were checked against the patch as it was when lost (with a slack for the time
-        since); each is now also checked against the tracklet's own next frames, which drops
-        those where it was still partly hidden (coming out from under something)."""
-        mass = np.array([seen.mass for seen in t.looks])
-        for k, (f, r, seen) in enumerate(zip(t.frames, t.rects, t.looks)):
-            after = mass[k + 1:k + 1 + HISTORY] if k + 1 < mass.size else mass[-HISTORY:]
-            ref = float(np.median(after))
-            if t.good[k] and self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
-                self.out[f] = (*r, 1)
-                self.ref.add(seen, f)
+        """Report the frames of the tracklet and of those leading to it (_chain) as the patch
+        and track it from its last window. Their frames were checked against the patch as it
+        was when lost (with a slack for the time since); each is now also checked against the
+        chain's own next frames, which drops those where it was still partly hidden
+        (coming out from under something)."""
+        chain = self._chain(t)
+        mass = np.array([seen.mass for piece in chain for seen in piece.looks])
+        k = -1
+        for piece in chain:
+            for f, r, seen, good in zip(piece.frames, piece.rects, piece.looks, piece.good):
+                k += 1
+                after = mass[k + 1:k + 1 + HISTORY] if k + 1 < mass.size else mass[-HISTORY:]
+                ref = float(np.median(after))
+                if good and self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
+                    self.out[f] = (*r, 1)
+                    self.ref.add(seen, f)
         self.last = (t.rects[-1][0], t.rects[-1][1], t.frames[-1])
         consecutive = len(t.frames) > 1 and t.frames[-2] == t.frames[-1] - 1
         self.vel = (t.rects[-1][0] - t.rects[-2][0], t.rects[-1][1] - t.rects[-2][1]) \

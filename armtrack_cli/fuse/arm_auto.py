@@ -64,6 +64,8 @@ class ArmEstimate:
     rms_px: float  # camera residual RMS at the solution
     rms_constraint_m: float
     wrist: np.ndarray  # (frames, 3) the batch's own wrist estimates, m in W
+    sphere_fit: dict | None = None  # this batch's own estimate, when refined (arm_refine.py)
+    refine_iterations: int = 0
 
     def as_dict(self) -> dict:
         return {"estimated": list(self.estimated),
@@ -73,7 +75,12 @@ class ArmEstimate:
                 "forearm_m": round(self.forearm_m, 4), "forearm_sd_m": round(float(self.sd[4]), 4),
                 "from_s": round(self.t_span[0], 3), "to_s": round(self.t_span[1], 3),
                 "frames": self.frames, "rms_px": round(self.rms_px, 2),
-                "rms_constraint_m": round(self.rms_constraint_m, 4)}
+                "rms_constraint_m": round(self.rms_constraint_m, 4),
+                **({"refined_by": "arm smoother, arm as static states (fuse/arm_refine.py)",
+                    "refine_iterations": self.refine_iterations,
+                    "sphere_fit": {k: self.sphere_fit[k] for k in (
+                        "shoulder_m", "shoulder_sd_m", "upper_arm_m", "upper_arm_sd_m",
+                        "forearm_m", "forearm_sd_m")}} if self.sphere_fit else {})}
 
 
 def varied_stretch(uv: np.ndarray, f_W: np.ndarray, n: int) -> slice:

@@ -171,6 +171,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             x = _predict_particles(x, inp.steps, k, ace[k], eps[:, :6])
         if seen[k]:  # step 2: weights from the colour-tracking likelihood (eq. 11), gated
             px = proj(x[:, :3])
+            after_blind = run_gated >= s.reacquire_frames  # the first detection after a card
             codes[k], run_gated = robust.gate(
                 robust.pixel_mahalanobis2(px, w, inp.z[k], s.pixel_sigma**2), s.gate_chi2,
                 run_gated, s.reacquire_frames)
@@ -180,7 +181,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
                 px = proj(x[:, :3])
             if codes[k] != robust.GATED:
                 w = _colour_layer(x, px, w, inp.z[k], points[k], codes, k, proj, s, rng,
-                                  constrained)
+                                  constrained, after_blind)
         else:  # no detection: counts toward re-acquiring as a gated one
             run_gated = robust.blind(run_gated)
         used = codes[k] not in (robust.NONE, robust.GATED)
@@ -209,14 +210,16 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
 
 def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
                   points: np.ndarray, codes: np.ndarray, k: int, proj: Projection,
-                  s: FuseSettings, rng: Stream, constrained: bool) -> np.ndarray:
+                  s: FuseSettings, rng: Stream, constrained: bool,
+                  after_blind: bool = False) -> np.ndarray:
     """Step 2's weights w ∝ w⁻ p(z | x) (eq. 11, 14) of the particles x (N, 6) whose pixels
     are px; pf-constraint first re-seeds x in place on the two ray-sphere points if it
-    re-acquires or the weights collapse, and codes[k] says so (fuse/robust.py)."""
+    re-acquires, the weights collapse or ``after_blind`` (the first detection after
+    reacquire_frames frames without one), and codes[k] says so (fuse/robust.py)."""
     inv2s2 = 0.5 / s.pixel_sigma**2
     w_new = weights(-inv2s2 * np.einsum("ij,ij->i", px - z, px - z), w)
     n_seed = int(np.floor(s.reseed_share * x.shape[0] + 0.5))
-    if not constrained or n_seed == 0 or not (codes[k] == robust.REACQUIRED
+    if not constrained or n_seed == 0 or not (codes[k] == robust.REACQUIRED or after_blind
                                                or ess(w_new) < s.reseed_ess * x.shape[0]):
         return w_new
     m, c = moments(x[:, :3], w)  # the predicted cloud, before the colour weights
@@ -295,7 +298,9 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         if arm is None:
             raise ValueError(f"{method} needs the arm model")
         est = run_particles(inp, x0, P0, proj, s, arm, constrained=True)
-        if method == "pf-constraint" and s.imu_bias_window_s > 0:
+        if method == "pf-constraint" and s.imu_error == "causal":
+            est = run_error_corrected(inp, x0, P0, proj, s, arm, est)
+        elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
             return run_arm_smoother(inp, x0, P0, proj, s, arm,
@@ -318,6 +323,24 @@ def run_bias_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projec
     est = run_particles(replace(inp, steps=imu_bias.corrected(inp.steps, b)), x0, P0, proj, s,
                         arm, constrained=True)
     summary = {"imu_bias_rms_m_s2": round(float(np.sqrt(np.mean(np.sum(b**2, axis=1)))), 4)}
+    return replace(est, summary=summary)
+
+
+def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+                        s: FuseSettings, arm: Arm, first: Estimates) -> Estimates:
+    """pf-constraint again on a_W corrected by the IMU's orientation error and accelerometer
+    bias as a forward Kalman pass estimates them from the data up to each frame, linearised
+    about the first run's estimates (fuse/imu_error.py): still a forward filter."""
+    from armtrack_cli.fuse import imu_error  # numba's: imported only when it runs
+
+    if inp.imu is None or inp.t is None:
+        raise ValueError("imu_error = 'causal' needs the IMU samples and the frame times")
+    th, ba = imu_error.causal_errors(inp, first.mean, x0, P0, proj, s, arm)
+    est = run_particles(replace(inp, steps=imu_error.corrected(inp, inp.steps, th, ba),
+                                q_WB=arm_smoother.corrected(inp.q_WB, th)), x0, P0, proj, s, arm,
+                        constrained=True)
+    summary = {"orientation_error_rms_deg": round(float(np.degrees(np.sqrt(np.mean(np.sum(
+        th**2, axis=1))))), 3), "accel_bias_m_s2": [round(float(v), 4) for v in ba[-1]]}
     return replace(est, summary=summary)
 
 

@@ -290,6 +290,7 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
     predicted pixels px, then (unless gated) w ∝ w⁻ p(z | x), roughened first if it
     re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated)."""
     points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
+    after_blind = run_gated >= reacquire  # the first detection after a card: re-seed too
     codes[k], run_gated = _gate_code(_pixel_mahalanobis2(px, w, z, r2), gate, run_gated,
                                      reacquire)
     if codes[k] == 2:
@@ -300,7 +301,8 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
         _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
     _normalise(lw, w)
     N = w.size
-    if constrained and n_seed > 0 and (codes[k] == 3 or 1.0 / _sum_sq(w) < reseed_ess * N):
+    if constrained and n_seed > 0 and (codes[k] == 3 or after_blind
+                                       or 1.0 / _sum_sq(w) < reseed_ess * N):
         _reseed(xs, w_prior, points[k], reseed_sigma, prior_m, state, seed_eps, m6, c6, xr)
         codes[k] = 4 if codes[k] == 1 else codes[k]
         _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)

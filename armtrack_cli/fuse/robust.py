@@ -25,8 +25,9 @@ gated detections there kept the forward filter 40 cm off for a third of a second
 
 **Re-seeding (pf-constraint).** The detection's camera ray meets the sphere on which the
 wrist must lie (|p − (S + L2 R u)| = L1, Tao & Hu eq. 15) at up to two points. When the colour
-layer collapses (ESS after the colour weights < ``reseed_ess`` · N: the cloud is off the ray)
-or the filter re-acquires, a share ``reseed_share`` of the particles is moved onto those two
+layer collapses (ESS after the colour weights < ``reseed_ess`` · N: the cloud is off the ray),
+the filter re-acquires, or a detection comes after reacquire_frames frames without one (a card:
+the cloud drifted on the IMU alone), a share ``reseed_share`` of the particles is moved onto those two
 points (± ``reseed_sigma_m``, velocities kept) before the colour weights are computed again,
 and the paper's steps go on. The two points share the seeds in proportion to the predicted
 cloud's density there (its Gaussian fit, SD widened by ``reseed_prior_m``), so the prior

@@ -11,6 +11,7 @@ from armtrack_cli.core.methods import DEFAULT_METHOD
 SMOOTHERS = ("rts", "none")
 SHOULDERS = ("fixed", "drifting")
 HOLDS = ("linear", "sample")  # fuse/imu_fold.py
+IMU_ERRORS = ("none", "causal")  # pf-constraint's a_W correction (fuse/imu_error.py)
 ORIENTATION_MODELS = ("gyro", "gauss-markov")  # fuse/arm_smoother.py
 
 
@@ -49,6 +50,9 @@ class FuseSettings:
     imu_bias_window_s: float = 0.0  # pf-constraint: > 0 runs it on a_W less the acceleration
     #                                 error fitted causally over this many seconds of its own
     #                                 earlier estimates (fuse/imu_bias.py); 0: off
+    imu_error: str = "none"  # pf-constraint: "causal" runs it on a_W corrected by the IMU's
+    #                          orientation error and accelerometer bias as a forward Kalman
+    #                          pass estimates them up to each frame (fuse/imu_error.py)
     smoother: str = "rts"  # offline fixed-interval smoothing of the filtered estimates; the
     #                        tao2008-* recipes set "none" to reproduce the paper's filters
     seed: int = 0
@@ -103,6 +107,7 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
                           "gate_chi2 ≥ 0 (0: off), reacquire_frames ≥ 1, 0 ≤ reseed_share ≤ 1, "
                           "reseed_ess, reseed_sigma_m, reseed_prior_m, imu_bias_window_s ≥ 0")
     for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS),
+                              ("imu_error", s.imu_error, IMU_ERRORS),
                               ("orientation_model", s.orientation_model, ORIENTATION_MODELS)):
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",

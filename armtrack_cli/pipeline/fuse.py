@@ -122,7 +122,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
         from armtrack_cli.pipeline import arm_model
 
-        auto, p = arm_model.estimate_with_offset(session, p, lambda known: prepare(known, dest, s))
+        auto, p = arm_model.estimate_with_offset(session, p, lambda known: prepare(known, dest, s),
+                                                 s)
         session = arm_model.with_arm(session, auto.shoulder, auto.upper_arm_m, auto.forearm_m)
         p = dataclasses.replace(p, arm=dataclasses.replace(
             p.arm, shoulder=auto.shoulder, L1=auto.upper_arm_m, L2=auto.forearm_m))
