@@ -167,12 +167,37 @@ def _end_to_end(minutes: float, rows, method: str) -> list[str]:
                 f"{peak:.0f} MB (goal ≤ 300 MB: {_met(peak <= 300)})."]
 
 
+def _with_length(e2e: dict) -> list[str]:
+    """Each stage's seconds per minute of session and peak memory, side by side over the
+    session lengths run, and whether time grows linearly (the 1-minute session's fixed costs,
+    imports above all, weigh on its per-minute figure: the linearity verdict is over the
+    sessions of 10 minutes and more when there are two)."""
+    mins = sorted(e2e)
+    L = ["", "## Growth with session length, end to end", "",
+         "Seconds per minute of session (peak memory, MB) of each stage, from the tables above; "
+         + ("the 60-minute session is six back-to-back copies of the 10-minute one "
+            "(benchmarks/sessions.tiled_session: continuous time stamps, the arm at rest at "
+            "each seam)." if 60 in mins else ""), "",
+         "| stage | " + " | ".join(f"{m:g} min" for m in mins) + " | growth |",
+         "|---|" + "---|" * (len(mins) + 1)]
+    names = [r[0] for r in e2e[mins[0]]]
+    long = [m for m in mins if m >= 10]
+    span = long if len(long) > 1 else mins
+    for i, name in enumerate(names):
+        per = {m: e2e[m][i][1] / m for m in mins}
+        cells = " | ".join(f"{per[m]:.2f} ({e2e[m][i][2]:.0f})" for m in mins)
+        ok = all(v == v and v > 0 for v in per.values())
+        L.append(f"| {name} | {cells} | {_linear([per[m] for m in span]) if ok else '—'} |")
+    return L
+
+
 def _memory(res) -> list[str]:
     """Peaks of the end-to-end runs side by side (flat: the longest no higher), and the
     import floor that bounds them."""
     L = []
     peaks = {m: max(r[2] for r in rows[1:]) for m, rows in res["e2e"].items()}
     if len(peaks) > 1:
+        L += _with_length(res["e2e"])
         lo, hi = min(peaks), max(peaks)
         L += ["", f"Peak memory with session length: {peaks[lo]:.0f} MB at {lo:g} minutes, "
               f"{peaks[hi]:.0f} MB at {hi:g} (goal: flat, the longer no higher: "
