@@ -14,9 +14,9 @@ from armtrack_cli.fuse import pf_kernel as K
 
 
 @njit
-def _normals(r, s, eps):
+def _normals(r, s, eps, work):
     for _ in range(r):
-        K.fill_normals(s, eps)
+        K.fill_normals_with(s, eps, work)
 
 
 @njit
@@ -79,7 +79,8 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
     walk, centre = np.r_[np.full(3, 0.005), np.full(3, 0.01)], np.array([0.1, 0.45, 0.32])
     mean, cov = np.empty(6), np.empty((6, 6))
     px = np.ascontiguousarray(np.c_[rng.normal(320, 20, n), rng.normal(240, 20, n)].T)
-    cases = [("12 standard normals per particle (SplitMix64, ziggurat)", 1, _normals, (s, eps)),
+    cases = [("12 standard normals per particle (SplitMix64, ziggurat)", 1, _normals,
+              (s, eps, K.normals_work(eps.size))),
              ("predict and weigh by the detection (eqs. 10, 11)", 1, _predict_weigh,
               (xs.copy(), eps, dt, d3, ace, z, cam, dist, w, np.empty(n), np.empty((2, n)))),
              ("normalise the weights (exp)", 2, _normalise, (lw, w)),

@@ -54,6 +54,28 @@ def long_session(minutes: float, env=None) -> Path:
     return folder
 
 
+def tiled_session(copies: int, base_minutes: float = 10, env=None) -> Path:
+    """A session ``copies`` × ``base_minutes`` long made of back-to-back copies of the cached
+    ``base_minutes`` one (simulating 60 minutes takes half an hour; six copies of 10 take a few
+    minutes, mostly re-encoding the video). Each stream is cut to whole periods of its own
+    clock (base_minutes × 60 s) and continued with continuous time stamps, frame numbers and
+    (wrapping) packet counters: the simulated arm starts and ends each copy at rest at the
+    same place, so the motion is continuous; the IMU's slowly wandering orientation error and
+    its noise restart with each copy (a jump of a fraction of a degree)."""
+    base = long_session(float(base_minutes), env=env)
+    folder = base.with_name(f"tiled-{copies}x{base_minutes:g}")
+    if (folder / "session.toml").exists():
+        return folder
+    part = folder.with_name(folder.name + ".part")
+    shutil.rmtree(part, ignore_errors=True)
+    part.mkdir(parents=True)
+    code = ("import sys; sys.path.insert(0, 'benchmarks'); from tiling import tile; "
+            f"tile({str(base)!r}, {str(part)!r}, {copies}, {base_minutes * 60.0})")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=REPO, env=env)
+    part.rename(folder)
+    return folder
+
+
 if __name__ == "__main__":  # python benchmarks/sessions.py 10 60: simulate ahead of `make bench`
     for m in sys.argv[1:]:
         print(long_session(float(m)))

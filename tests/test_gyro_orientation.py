@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse.gyro_orientation import gyro_anchored, integrate_gyro
+from armtrack_cli.fuse.gyro_orientation import gyro_anchored, integrate_gyro, prefix_products
 from armtrack_cli.simulate import imu_model, kinematics
 from armtrack_cli.simulate.arm_session import ArmSimSettings
 
@@ -58,3 +58,16 @@ def test_without_a_gyro_the_reported_orientation():
     gyr[100:150] = np.nan  # a gap: those steps turn as the reported orientation does
     q = gyro_anchored(t, m["quat"], gyr)
     assert np.isfinite(q).all()
+
+
+def test_prefix_products_equal_the_sequential_product():
+    """The doubling scan gives q_0 ⊗ q_1 ⊗ … ⊗ q_k as the plain left-to-right loop does, for
+    every k and lengths that are and are not powers of two (non-commuting random rotations)."""
+    rng = np.random.default_rng(7)
+    for m in (1, 2, 7, 64, 1000):
+        q = quat.normalize(rng.standard_normal((m, 4)))
+        seq = np.empty_like(q)
+        seq[0] = q[0]
+        for k in range(1, m):
+            seq[k] = quat.multiply(seq[k - 1], q[k])
+        assert np.abs(prefix_products(q) - seq).max() < 1e-12

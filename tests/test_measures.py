@@ -218,7 +218,9 @@ def test_posterior_draws_have_the_stated_sd_correlation_and_smoothness():
     from armtrack_cli.measures.uncertainty import smooth_draws
 
     t = np.arange(0, 20, 0.01)
-    e = smooth_draws(t, np.full((t.size, 2), 0.005), replace(DEFAULT, draws=200, draw_corr_s=1.0))
+    e = np.stack(list(smooth_draws(t, np.full((t.size, 2), 0.005),
+                                   replace(DEFAULT, draws=200, draw_corr_s=1.0))))
+    assert e.shape == (200, t.size, 2)
     assert e.std() == pytest.approx(0.005, rel=0.05)
     r = np.mean(e[:, :-100] * e[:, 100:]) / np.mean(e**2)  # lag 1 s
     assert r == pytest.approx(np.exp(-1), abs=0.05)

@@ -81,3 +81,21 @@ def test_resampling_kernel_is_the_references(scheme, case):
         _resample(w, a, pf_kernel.RESAMPLING[scheme], idx, work, start)
         np.testing.assert_array_equal(idx, SCHEMES[scheme](w, splitmix.Stream(b)))
         np.testing.assert_array_equal(a, b)
+
+
+def test_each_layer_needs_six_normals_per_particle():
+    """Why a pf-constraint frame draws 12 normals per particle: no draw of lower rank has the
+    same law. The prediction's Q = L Lᵀ ⊗ I₃ is the closed form q [[Δ³/3, Δ²/2], [Δ²/2, Δ]] of
+    white-noise acceleration over Δ (each axis), whose determinant q² Δ⁴ / 12 > 0: rank 2 per
+    axis, 6 in all (the paper's eq. 6 drives 3-D noise through [Δ³/6, Δ²], rank 3, but that is
+    not the model the filters share); the random walk (eqs. 17, 18) is diagonal, rank 6."""
+    from armtrack_cli.fuse.models import Steps
+
+    q, dt = 0.3, np.array([0.0, 1 / 30, 1 / 25])
+    st = Steps(dt, np.zeros((3, 3)), np.zeros((3, 3)), q)
+    for d, (a, c, e) in zip(dt[1:], st.noise_factors()[1:], strict=True):
+        L = np.array([[a, 0.0], [c, e]])
+        np.testing.assert_allclose(L @ L.T, q * np.array([[d**3 / 3, d**2 / 2], [d**2 / 2, d]]),
+                                   rtol=1e-12)
+        assert np.isclose(np.linalg.det(L @ L.T), q**2 * d**4 / 12, rtol=1e-9)
+        assert np.linalg.matrix_rank(np.kron(L @ L.T, np.eye(3)), tol=1e-12 * q * d) == 6

@@ -75,3 +75,16 @@ def test_the_counter_is_the_only_state():
     whole = splitmix.normals(s.copy(), 1000)
     first = splitmix.normals(s, 400)
     np.testing.assert_array_equal(np.r_[first, splitmix.normals(s, 600)], whole)
+
+
+def test_work_arrays_reused_give_the_references_draws():
+    """The kernel makes fill_normals' work once per run and reuses it every frame: what one
+    call leaves in it must not change the next call's draws (2 × 60,000, ~800 slow paths)."""
+    a, b = np.array([11, 0], np.uint64), np.array([11, 0], np.uint64)
+    out = np.empty((12, 5000))
+    work = splitmix.normals_work(out.size)
+    for _ in range(2):
+        splitmix.fill_normals_with(a, out, work)
+        ref = splitmix.normals(b, out.shape)
+        assert np.all(np.abs(out - ref) <= 2 * np.spacing(np.abs(ref)))
+    np.testing.assert_array_equal(a, b)

@@ -18,7 +18,7 @@ def weights(loglik: np.ndarray, prior: np.ndarray | None = None) -> np.ndarray:
     if not np.isfinite(m):
         return np.full(lw.size, 1.0 / lw.size)
     w = np.exp(lw - m)
-    return w / w.sum()
+    return w * (1.0 / w.sum())  # a multiply, as the compiled kernel's (fuse/pf_kernel.py)
 
 
 def ess(w: np.ndarray) -> float:

@@ -49,7 +49,7 @@ def residual(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     with weights that were not renormalised, or a fixed count, biases the counts.)
     """
     n = w.size
-    nw = n * (w / w.sum())
+    nw = w * (n / w.sum())  # N w_i, by a multiply as the compiled kernel's
     counts = nw.astype(np.int64)  # floor, the weights being non-negative
     det = np.repeat(np.arange(n), counts)
     k = n - det.size

@@ -21,6 +21,8 @@ import numpy as np
 from numba import njit
 from numba.np.random import _constants as _zig  # numpy's ziggurat tables, as numba ships them
 
+from armtrack_cli.filters.fast_exp import exp_le0
+
 _KI, _WI, _FI = _zig.ki_double.copy(), _zig.wi_double.copy(), _zig.fi_double.copy()
 _R, _INV_R = float(_zig.ziggurat_nor_r), float(_zig.ziggurat_nor_inv_r)
 _G = np.uint64(0x9E3779B97F4A7C15)  # γ: the golden ratio's odd 64-bit fraction
@@ -57,17 +59,18 @@ def random(s):
 @njit(cache=True, error_model="numpy")
 def fill_random(s, out):
     """out (n,) ← n uniforms on [0, 1), as ``uniforms(s, n)``."""
-    base, n = s[0] + (s[1] + _U1) * _G, out.size
-    for i in range(n):  # SIMD: each lane its own draw
-        out[i] = np.float64(_mix(base + np.uint64(i) * _G) >> _U11) * _TWO_M53
+    z, n = s[0] + (s[1] + _U1) * _G, out.size
+    for i in range(n):  # SIMD: each lane its own draw, z = base + iγ by induction (no multiply)
+        out[i] = np.float64(_mix(z) >> _U11) * _TWO_M53
+        z += _G
     s[1] += np.uint64(n)
 
 
 @njit(cache=True, error_model="numpy")
-def _slow(r, idx, x):
+def _slow(r, idx, x, j):
     """The ziggurat after its fast path rejected raw draw r (layer idx, abscissa x): the tail
-    beyond R (idx = 0) or the wedge test, then new attempts, from r's own sub-stream."""
-    j = np.uint64(0)
+    beyond R (idx = 0) or the wedge test, then new attempts, from r's own sub-stream, whose
+    first j draws are spent."""
     while True:
         u1 = np.float64(_mix(r + (j + _U1) * _G) >> _U11) * _TWO_M53
         r2 = _mix(r + (j + _U2) * _G)
@@ -77,7 +80,7 @@ def _slow(r, idx, x):
             yy = -np.log1p(-np.float64(r2 >> _U11) * _TWO_M53)
             if yy + yy > xx * xx:
                 return -(_R + xx) if (r >> _U8) & _U1 else _R + xx
-        elif (_FI[idx - 1] - _FI[idx]) * u1 + _FI[idx] < np.exp(-0.5 * x * x):
+        elif (_FI[idx - 1] - _FI[idx]) * u1 + _FI[idx] < exp_le0(-0.5 * x * x):
             return x
         else:  # a new attempt on r2
             r, idx, x, ok = _attempt(r2)
@@ -106,27 +109,88 @@ def _attempt(r):
 def fill_normals(s, out):
     """out (C-contiguous, any shape) ← standard normals in row-major order, as
     ``normals(s, out.shape)``: the fast path for all in SIMD, marking the rejected ones; then
-    those, found 8 marks (one uint64) at a time."""
+    those (~1.3 %), listed, and their first round (the wedge test, or a new attempt) for all
+    in one branch-free loop; the tail and the rare second rounds one at a time."""
+    fill_normals_with(s, out, normals_work(out.size))
+
+
+@njit(cache=True, error_model="numpy")
+def normals_work(n):
+    """The work arrays of fill_normals_with for n normals, made once for many calls."""
+    m = 8 * ((n + 7) // 8)
+    return (np.zeros(m, np.uint8), np.empty(m + 8, np.int64), np.empty(m // 8, np.int64),
+            np.empty(m), np.empty(m, np.bool_), np.empty(m, np.uint64))
+
+
+@njit(cache=True, error_model="numpy")
+def fill_normals_with(s, out, work):
+    """fill_normals with its work arrays given (normals_work(out.size))."""
     n = out.size
     base = s[0] + (s[1] + _U1) * _G
-    flat, rejected = out.reshape(n), np.zeros(8 * ((n + 7) // 8), np.uint8)
-    _fast_path(base, flat, rejected)
-    marks = rejected.view(np.uint64)
-    for b in range(marks.size):
-        if marks[b]:
-            for i in range(8 * b, 8 * b + 8):
-                if rejected[i]:
-                    r, idx, x, ok = _attempt(_mix(base + np.uint64(i) * _G))
-                    flat[i] = _slow(r, idx, x)
+    rejected, pending, words, x, again, raw = work
+    flat = out.reshape(n)
+    _fast_path(base, flat, rejected[:n], raw[:n])
+    m = _listed(rejected, pending, words)
+    if m:
+        _first_round(base, pending[:m], x[:m], again[:m])
+        for t in range(m):
+            i = pending[t]
+            flat[i] = x[t]
+            if again[t]:  # the tail (j = 0: from the start) or a second rejection (j = 2)
+                r, idx, xi, ok = _attempt(_mix(base + np.uint64(i) * _G))
+                j = np.uint64(0)
+                if idx != 0:
+                    r, idx, xi, ok = _attempt(_mix(r + _U2 * _G))
+                    j = _U2
+                flat[i] = _slow(r, idx, xi, j)
     s[1] += np.uint64(n)
 
 
 @njit(cache=True, error_model="numpy")
-def _fast_path(base, flat, rejected):
-    """flat (n,) ← the fast path on raw draws base + iγ (a 1-D array of its own: LLVM does not
-    vectorise the loop on a reshaped view), rejected[i] = 1 where it rejects."""
+def _listed(rejected, pending, words):
+    """pending[:m] ← the indices where rejected is set; returns m. Without a branch that
+    mispredicts: first the words (8 marks each) that hold a mark, then their marks."""
+    marks, nw = rejected.view(np.uint64), 0
+    for b in range(marks.size):
+        words[nw] = b
+        nw += np.int64(marks[b] != 0)
+    m = 0
+    for t in range(nw):
+        for i in range(8 * words[t], 8 * words[t] + 8):
+            pending[m] = i
+            m += np.int64(rejected[i])
+    return m
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _first_round(base, pending, out, again):
+    """_slow's first round for the rejected draws at ``pending``, all alike in SIMD: the wedge
+    test on u1 = sub-draw 1, else a new attempt on sub-draw 2, into out; again where that
+    does not settle it, or in the tail (layer 0), which _slow draws apart."""
+    for t in range(pending.size):
+        r, idx, x, _ = _attempt(_mix(base + np.uint64(pending[t]) * _G))
+        u1 = np.float64(_mix(r + _U1 * _G) >> _U11) * _TWO_M53
+        _, _, x2, ok2 = _attempt(_mix(r + _U2 * _G))
+        lo = _FI[max(idx, 1) - 1]  # layer 0 (the tail) never takes the wedge
+        wedge = (lo - _FI[idx]) * u1 + _FI[idx] < exp_le0(-0.5 * x * x)
+        out[t] = x if wedge else x2
+        again[t] = (idx == 0) | (not (wedge | ok2))
+
+
+@njit(cache=True, error_model="numpy")
+def _fast_path(base, flat, rejected, raw):
+    """flat (n,) ← the fast path on raw draws base + iγ (1-D arrays of their own: LLVM does not
+    vectorise a loop on a reshaped view), rejected[i] = 1 where it rejects; raw (n,) work. The
+    raw draws in SIMD, z = base + iγ by induction (one 64-bit multiply fewer a draw); the
+    tables' look-ups one at a time, which here beats LLVM's gathers by a sixth."""
+    z = base
     for i in range(flat.size):
-        r, idx, x, ok = _attempt(_mix(base + np.uint64(i) * _G))
+        raw[i] = _mix(z)
+        z += _G
+    for i in range(flat.size):
+        r, idx, x, ok = _attempt(raw[i])
+        if idx < 0:  # never: an exit that keeps LLVM from vectorising the look-ups
+            break
         flat[i] = x
         rejected[i] = not ok
 

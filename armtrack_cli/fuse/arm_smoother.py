@@ -23,7 +23,7 @@ first pass (pf-constraint, RTS-smoothed), so the ray–sphere branch is the part
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from armtrack_cli.core import quaternion as quat
 from armtrack_cli.fuse import imu_fold, rest
 from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
+from armtrack_cli.fuse.smoother_blocks import smooth_blocked
 from armtrack_cli.fuse.smoother_kernel import smooth
 
 P_, V_, TH, BA, BG = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
@@ -54,7 +55,7 @@ class ImuSamples:
 @dataclass(frozen=True)
 class Smoothed:
     x: np.ndarray  # (n, d) smoothed state
-    P: np.ndarray  # (n, d, d)
+    P: np.ndarray  # (n, 6, 6) the (p, v) block of the covariance
     q_WB: np.ndarray  # (n, 4) the corrected orientation R = exp(−[δθ]×) R̂
     elbow_cov: np.ndarray  # (n, 3, 3)
     gated: np.ndarray  # (n,) bool, detections not used
@@ -238,7 +239,6 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     period = float(np.median(np.diff(imu.t)))
     gyro = s.orientation_model == "gyro" and imu.gyro()
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
-    F, b, Q = process(fd, s, shoulder, period, track)
     m0, Pm0 = prior(x0, P0, s, shoulder, gyro)
     X = np.zeros((t_frames.size, m0.size))
     X[:, :6] = first
@@ -246,6 +246,10 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
         X[:, drift_slice(m0.size)] = m0[drift_slice(m0.size)]
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
+    if s.rest_velocity_sd_m_s <= 0:  # no zero-velocity rows: the memory-flat pass
+        return _run_blocked(fd, track, period, (m0, Pm0), X, z, q_hat, proj, s, arm, shoulder,
+                            gyro, use_c, use_k)
+    F, b, Q = process(fd, s, shoulder, period, track)
     rc, rk = s.pixel_sigma**2, s.constraint_sigma_m**2
     still = resting(imu, t_frames, z, s, m_pre)
     iterations, step = 0, np.inf
@@ -262,9 +266,50 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
         X, iterations = Xn, iterations + 1
     X, P, gated, q_hat = X[m_pre:], P[m_pre:], gated[m_pre:], q_hat[m_pre:]  # the video's
-    u = forearm(q_hat, X[:, TH], arm)
-    J = np.zeros((X.shape[0], 3, X.shape[1]))  # ∂E/∂x, E = p − L2 u(δθ) (eq. 2)
+    return Smoothed(X, P[:, :6, :6], corrected(q_hat, X[:, TH]), _elbow_cov(q_hat, X, P, arm),
+                    gated, iterations, gyro)
+
+
+def _run_blocked(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, gyro, use_c,
+                 use_k) -> Smoothed:
+    """run()'s iterations without zero-velocity rows, each a checkpointed pass
+    (fuse/smoother_blocks.py: equal to the plain pass, memory flat in the session's length):
+    the model built a block of frames at a time, only the (p, v) and elbow covariances kept."""
+    n = X.shape[0]
+    sh_fixed = None if shoulder is not None else arm.shoulder
+    P_pv, elbow_cov = np.empty((n, 6, 6)), np.empty((n, 3, 3))
+    iterations, step, gated = 0, np.inf, np.zeros(n, bool)
+    while iterations < s.smoother_iterations and step >= STEP_TOL_M:
+        Xn = np.empty_like(X)
+
+        def model(lo: int, hi: int, X=X) -> tuple:  # the steps and rows of frames lo … hi − 1
+            F, b, Q = process(_rows(fd, lo, hi), s, shoulder, period,
+                              None if track is None else _rows(track, lo, hi))
+            Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed)
+            return F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi]
+
+        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, Xn=Xn) -> None:
+            Xn[lo:hi], P_pv[lo:hi] = xs, Ps[:, :6, :6]
+            elbow_cov[lo:hi] = _elbow_cov(q_hat[lo:hi], xs, Ps, arm)
+
+        gated = smooth_blocked(*prior_, model, n, rc=s.pixel_sigma**2,
+                               rk=s.constraint_sigma_m**2,
+                               gate=float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf,  # 0: off
+                               keep=keep)
+        step = np.abs(Xn[:, P_] - X[:, P_]).max()
+        X, iterations = Xn, iterations + 1
+    return Smoothed(X, P_pv, corrected(q_hat, X[:, TH]), elbow_cov, gated, iterations, gyro)
+
+
+def _rows(a, lo: int, hi: int):
+    """Frames lo … hi − 1 of a per-frame dataclass (imu_fold.Folded, OrientationTrack)."""
+    return type(a)(**{f.name: getattr(a, f.name)[lo:hi] for f in fields(a)})
+
+
+def _elbow_cov(q_hat: np.ndarray, x: np.ndarray, P: np.ndarray, arm: Arm) -> np.ndarray:
+    """(n, 3, 3) covariance of the elbow E = p − L2 u(δθ) (eq. 2): J P Jᵀ, J = ∂E/∂x."""
+    u = forearm(q_hat, x[:, TH], arm)
+    J = np.zeros((x.shape[0], 3, x.shape[1]))
     J[:, :, P_] = np.eye(3)
     J[:, :, TH] = -arm.L2 * imu_fold.skew(u)
-    return Smoothed(X, P, corrected(q_hat, X[:, TH]), J @ P @ np.swapaxes(J, 1, 2), gated,
-                    iterations, gyro)
+    return J @ P @ np.swapaxes(J, 1, 2)

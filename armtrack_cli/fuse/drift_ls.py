@@ -53,16 +53,15 @@ def normal_parts(rows: SplineRows, J: np.ndarray, y: np.ndarray) -> tuple[np.nda
     U = 3 * K - 1  # bandwidth above the diagonal
     col = _columns(rows)
     M = np.einsum("kia,kib->kab", J, J)  # J_kᵀ J_k
-    idx, vals = [], []
-    for d in range(K):
+    ab = np.zeros((U + 1) * n_cols)
+    for d in range(K):  # one (d, e, a, b) term at a time: memory of one frame-long column
         for e in range(d, K):
             ww = rows.w[:, d] * rows.w[:, e]
             for a in range(3):
                 for b in range(3) if d < e else range(a, 3):
-                    idx.append((U + col[:, d, a] - col[:, e, b]) * n_cols + col[:, e, b])
-                    vals.append(ww * M[:, a, b])
-    ab = np.bincount(np.concatenate(idx), np.concatenate(vals),
-                     minlength=(U + 1) * n_cols).reshape(U + 1, n_cols)
+                    ab += np.bincount((U + col[:, d, a] - col[:, e, b]) * n_cols + col[:, e, b],
+                                      ww * M[:, a, b], minlength=ab.size)
+    ab = ab.reshape(U + 1, n_cols)
     return ab, Drift(rows, J).t(y), float(np.sum(y * y))
 
 

@@ -40,11 +40,20 @@ def integrate_gyro(t: np.ndarray, q_WB: np.ndarray, gyr_B: np.ndarray) -> np.nda
     bad = ~np.isfinite(steps).all(axis=1)
     if bad.any():  # the reported relative turn q_(k−1)* ⊗ q_k over those steps
         steps[bad] = quat.multiply(quat.conjugate(q_WB[:-1][bad]), q_WB[1:][bad])
-    out = np.empty_like(q_WB)
-    out[0] = quat.normalize(q_WB[0])
-    for k in range(1, t.size):  # a sequential product: M ~ 10⁴, cheap
-        out[k] = quat.multiply(out[k - 1], steps[k - 1])
-    return quat.normalize(out)
+    return quat.normalize(prefix_products(np.concatenate([quat.normalize(q_WB[:1]), steps])))
+
+
+def prefix_products(q: np.ndarray) -> np.ndarray:
+    """(M, 4) the running products q_0 ⊗ q_1 ⊗ … ⊗ q_k of (M, 4) quaternions, by doubling
+    (Hillis & Steele 1986): pass j multiplies each product by the one 2^j before it, so
+    ⌈log₂ M⌉ vectorised passes replace M sequential ones (the product is associative; the
+    order of the factors is kept)."""
+    out = np.array(q, dtype=float)
+    step = 1
+    while step < out.shape[0]:
+        out[step:] = quat.multiply(out[:-step], out[step:])
+        step *= 2
+    return out
 
 
 def gyro_anchored(t: np.ndarray, q_WB: np.ndarray, gyr_B: np.ndarray | None) -> np.ndarray:

@@ -35,6 +35,8 @@ from armtrack_cli.fuse.gyro_orientation import gyro_steps
 from armtrack_cli.fuse.models import GRAVITY_W
 from armtrack_cli.fuse.settings import HOLDS
 
+FOLD_CHUNK = 8192  # pieces folded at once: memory bounded however long the session
+
 
 @dataclass(frozen=True)
 class Folded:
@@ -101,16 +103,21 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
     t_frames (n,) s, all on the session clock."""
     if hold not in HOLDS:
         raise ValueError(f"unknown hold {hold!r}; holds are {', '.join(HOLDS)}")
-    R = quat.to_matrix(q_WB)  # (M, 3, 3) R̂_WB
-    s = np.einsum("mij,mj->mi", R, f_B)  # specific force in W
     k, (j, j1), (wv, wv1), (wp, wp1) = _segments(t_imu, t_frames, hold)
     n = t_frames.size
-    per_sample = np.concatenate([(s + GRAVITY_W)[:, :, None], skew(s), R], axis=2)  # (M, 3, 7)
     acc_v, acc_p = np.zeros((n, 3, 7)), np.zeros((n, 3, 7))
-    first = np.flatnonzero(np.r_[True, np.diff(k) > 0])  # pieces are in time order: k sorted
-    for acc, w0, w1 in ((acc_v, wv, wv1), (acc_p, wp, wp1)):
-        piece = w0[:, None, None] * per_sample[j] + w1[:, None, None] * per_sample[j1]
-        acc[k[first]] = np.add.reduceat(piece, first, axis=0)
+    for a in range(0, k.size, FOLD_CHUNK):  # pieces in time order, a chunk at a time
+        c = slice(a, a + FOLD_CHUNK)
+        lo, hi = j[c][0], j1[c][-1] + 1  # the samples this chunk's pieces use
+        R = quat.to_matrix(q_WB[lo:hi])  # R̂_WB
+        s = np.einsum("mij,mj->mi", R, f_B[lo:hi])  # specific force in W
+        per_sample = np.concatenate([(s + GRAVITY_W)[:, :, None], skew(s), R], axis=2)
+        kc = k[c]
+        first = np.flatnonzero(np.r_[True, np.diff(kc) > 0])  # k sorted: each frame's pieces
+        for acc, w0, w1 in ((acc_v, wv, wv1), (acc_p, wp, wp1)):
+            piece = (w0[c, None, None] * per_sample[j[c] - lo]
+                     + w1[c, None, None] * per_sample[j1[c] - lo])
+            acc[kc[first]] += np.add.reduceat(piece, first, axis=0)  # a frame may span chunks
     dt = np.r_[0.0, np.diff(t_frames)]
     return Folded(dt, acc_p[:, :, 0], acc_v[:, :, 0], acc_p[:, :, 1:4], acc_v[:, :, 1:4],
                   acc_p[:, :, 4:7], acc_v[:, :, 4:7])

@@ -318,18 +318,23 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
     grid = centre_s + np.arange(-search_s, search_s + step / 2, step)
     cache: dict = {}
     costs = np.array([cost(d, p, pre, n_img, cache) for d in grid])
+    del cache  # the grid's normal equations: the refinements keep their own
     if not np.isfinite(costs).any():
         return None
     delta = float(grid[int(np.argmin(costs))])
-    tried = [_refine(p, pre, n_img, delta, step) + (pre,)]
-    for _ in range(REPREPARE):  # the rays' depths with the IMU's orientation at the latest δ
-        pre = _prepare(p, tried[-1][0])
-        tried.append(_refine(p, pre, n_img, tried[-1][0], step) + (pre,))
-        if abs(tried[-1][0] - tried[-2][0]) < 1e-3:
-            break
     # where a ray grazes the sphere the depths' chain can take the other intersection from a
     # slightly different orientation: the preparation that explains the data best is kept
-    delta, _, pre = min(tried, key=lambda x: x[1])
+    # (only it and the latest: each holds per-sample arrays)
+    best = last = _refine(p, pre, n_img, delta, step) + (pre,)
+    for _ in range(REPREPARE):  # the rays' depths with the IMU's orientation at the latest δ
+        pre = _prepare(p, last[0])
+        now = _refine(p, pre, n_img, last[0], step) + (pre,)
+        best = now if now[1] < best[1] else best  # the first of equals, as min() took it
+        done, last = abs(now[0] - last[0]) < 1e-3, now
+        if done:
+            break
+    delta, _, pre = best
+    last = now = None  # noqa: F841 (their arrays freed before the SD)
     sd, frames = _sd(p, pre, delta)
     return ImuOffset(delta, sd, frames)
 

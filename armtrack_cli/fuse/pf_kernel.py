@@ -21,36 +21,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from armtrack_cli.filters.splitmix import fill_normals
+from armtrack_cli.filters.fast_exp import exp_nonpositive
+from armtrack_cli.filters.splitmix import fill_normals, fill_normals_with, normals_work
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _take, _total
 
-__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "run"]
+__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "fill_normals_with", "normals_work", "run"]
 
 # error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
 # whose check keeps LLVM from vectorising any loop that divides
-
-# exp(x) for x ≤ 0 in SIMD: x = n ln2 + r, |r| ≤ ln2 / 2 (Cody & Waite's two-part ln2), e^r by
-# its Taylor series to r¹³ (truncation < 5e-18), 2^n from a table; within 1 ulp of np.exp
-# (tests/test_fuse_filters.py), where libm's exp, one call per particle, is 3× slower.
-_LN2_HI, _LN2_LO, _LOG2E = 6.93147180369123816490e-01, 1.90821492927058770002e-10, 1 / np.log(2)
-_EXP_C = 1.0 / np.cumprod(np.r_[1.0, np.arange(1.0, 14.0)])  # 1 / j!, j = 0 … 13
-_POW2 = 2.0 ** -np.arange(1076.0)  # 2^-n, n = 0 … 1075 (2^-1075 rounds to 0)
-
-
-@njit(cache=True, error_model="numpy")
-def exp_nonpositive(x, m, out):
-    """out = exp(x − m) for x (n,) ≤ m (NaN stays NaN; below −745, where exp is 0, 0); out
-    must not be x (the loop is vectorised only for distinct arrays)."""
-    for i in range(x.size):
-        v = x[i] - m
-        v = max(v, -745.0) if v == v else v
-        n = np.rint(v * _LOG2E)
-        r = (v - n * _LN2_HI) - n * _LN2_LO
-        p = _EXP_C[13]
-        for j in range(12, -1, -1):
-            p = p * r + _EXP_C[j]
-        out[i] = p * _POW2[np.intp(-n)] if v == v else v
-
 
 @njit(cache=True, error_model="numpy")
 def _max(lw):
@@ -67,18 +45,28 @@ def _max(lw):
 
 @njit(cache=True, error_model="numpy")
 def _normalise(lw, w):
-    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form); uniform if every lw = −inf, or
-    if one is NaN (as the reference, whose max is then NaN)."""
+    """w ∝ exp(lw), normalised (Tao & Hu eq. 14 in log form) as particles.weights: × 1 / Σ,
+    not ÷ Σ (a multiply, where a divide is eight times slower); uniform if every lw = −inf,
+    or if one is NaN (as the reference, whose max is then NaN). Returns Σ w_i² (1 / ESS)."""
     m = _max(lw)
     n = lw.size
     if np.isfinite(m):
         exp_nonpositive(lw, m, w)
         s = _total(w)
         if np.isfinite(s):
-            for i in range(n):
-                w[i] /= s
-            return
+            return _scale_sum_sq(w, 1.0 / s)
     w[:] = 1.0 / n
+    return _sum_sq(w)
+
+
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _scale_sum_sq(w, c):
+    """w ← c w; returns Σ w_i²."""
+    ss = 0.0
+    for i in range(w.size):
+        w[i] *= c
+        ss += w[i] * w[i]
+    return ss
 
 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
@@ -171,18 +159,16 @@ def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uni
     if not (np.isfinite(z[0]) and np.isfinite(z[1])):
         return False
     ct, dt5, z0, z1 = _camera_tuple(cam), _dist_tuple(dist), z[0], z[1]  # in registers
+    log_w0 = np.log(w[0])  # a uniform prior: one log for all, in the same pass
     for i in range(n):
         u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
         px[0, i], px[1, i] = u, v
         eu, ev = u - z0, v - z1
-        lw[i] = -inv2s2 * (eu * eu + ev * ev)
-    if uniform:  # a uniform prior: one log for all
-        log_w0 = np.log(w[0])
-        for i in range(n):
-            lw[i] += log_w0
-    else:
-        for i in range(n):
-            lw[i] += np.log(w[i])
+        lw[i] = -inv2s2 * (eu * eu + ev * ev) + log_w0
+    if not uniform:
+        for i in range(n):  # (plain pf between resamplings): log w_i each
+            eu, ev = px[0, i] - z0, px[1, i] - z1
+            lw[i] = -inv2s2 * (eu * eu + ev * ev) + np.log(w[i])
     return True
 
 
@@ -288,26 +274,26 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
                     constrained, w_prior, xr, seed_eps, m6, c6):
     """methods.run_particles' step 2 after the gate (fuse/robust.py): the χ² gate on the
     predicted pixels px, then (unless gated) w ∝ w⁻ p(z | x), roughened first if it
-    re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated)."""
+    re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated, Σ w²)."""
     points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
     after_blind = run_gated >= reacquire  # the first detection after a card: re-seed too
     codes[k], run_gated = _gate_code(_pixel_mahalanobis2(px, w, z, r2), gate, run_gated,
                                      reacquire)
     if codes[k] == 2:
-        return False, run_gated
+        return False, run_gated, 0.0
     w_prior[:] = w
     if codes[k] == 3:  # re-acquired: spread the cloud first (xr: work)
         _roughen(xs, rough, state, xr)
         _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
-    _normalise(lw, w)
+    ss = _normalise(lw, w)
     N = w.size
     if constrained and n_seed > 0 and (codes[k] == 3 or after_blind
-                                       or 1.0 / _sum_sq(w) < reseed_ess * N):
+                                       or 1.0 / ss < reseed_ess * N):
         _reseed(xs, w_prior, points[k], reseed_sigma, prior_m, state, seed_eps, m6, c6, xr)
         codes[k] = 4 if codes[k] == 1 else codes[k]
         _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
-        _normalise(lw, w)
-    return True, run_gated
+        ss = _normalise(lw, w)
+    return True, run_gated, ss
 
 
 @njit(cache=True, error_model="numpy")
@@ -325,26 +311,27 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     xs, xr = np.ascontiguousarray(x.T), np.empty((6, N))
     w, lw = np.full(N, 1.0 / N), np.empty(N)
     eps = np.empty((12 if constrained else 6, N))
+    nwork = normals_work(eps.size)
     codes = np.zeros(n_frames, np.int8)
     w_prior, px = np.empty(N), np.empty((2, N))
     seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
     idx = np.empty(N, np.int64)
     work, start = np.empty((3, N)), np.empty(2 * N + 2, np.int64)
     uniform = True  # every w_i is exactly 1/N
-    run_gated = 0
+    run_gated, ss = 0, 0.0
     for k in range(n_frames):
-        fill_normals(state, eps)  # the reference's eps (12, N)
+        fill_normals_with(state, eps, nwork)  # the reference's eps (12, N)
         seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
                                   uniform, lw, px)
         if seen:  # the χ² gate, roughening and re-seeding
-            seen, run_gated = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw, px,
-                                              codes, run_gated, guard, constrained, w_prior,
-                                              xr, seed_eps, m6, c6)
+            seen, run_gated, ss = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw,
+                                                  px, codes, run_gated, guard, constrained,
+                                                  w_prior, xr, seed_eps, m6, c6)
         elif run_gated >= 0:  # no detection: as a gated one (robust.blind)
             run_gated += 1
         if seen:
             uniform = False
-        n_eff[k] = 1.0 / _sum_sq(w)
+        n_eff[k] = 1.0 / (ss if seen else _sum_sq(w))  # Σ w² from the normalisation
         if constrained:
             if seen:  # step 3 (without a detection the weights are still equal)
                 _resample(w, state, scheme, idx, work, start)
@@ -369,6 +356,6 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _sum_sq(w):
     s = 0.0
-    for v in w:
-        s += v * v
+    for i in range(w.size):  # by index: LLVM vectorises this, not numba's array iterator
+        s += w[i] * w[i]
     return s

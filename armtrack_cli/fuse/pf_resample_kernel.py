@@ -88,43 +88,61 @@ def _residual(w, s, idx, work, start):
     of each particle, then R = N − Σ floor(N w_i) draws from the fractional parts, emitted in
     ascending order as the reference's searchsorted of its sorted uniforms emits them. The
     draws are counted per particle instead of sorted: each u_j·top is looked up in the
-    cumulative fractional parts from a bucket table (one bucket per particle) and walked to
-    searchsorted's exact answer, #{cdf ≤ u_j·top} (at most N − 1). start (2N + 2,) int work."""
+    cumulative fractional parts from a bucket table (one bucket per particle, filled in the
+    cumulative sum's own pass) and walked to searchsorted's exact answer, #{cdf ≤ u_j·top}
+    (at most N − 1): three steps without a branch, then the rare rest. start (2N + 2,) int
+    work."""
     n = w.size
-    total, nw, cdf = _total(w), work[1], work[2]
-    for i in range(n):  # N w_i and its fractional part (SIMD)
-        nw[i] = n * (w[i] / total)
-        cdf[i] = nw[i] - np.floor(nw[i])
+    nw, cdf = work[1], work[2]
+    k = n - np.int64(_floors(w, _total(w), nw, cdf))
+    first, pos = start[:n + 1], start[n + 1:2 * n + 1]
+    first[:] = 0
+    scale = n / k if k > 0 else 0.0  # ≈ N / Σ frac, the buckets' scale (they only guide)
     m, acc = 0, 0.0
-    for i in range(n):
+    for i in range(n):  # serial: the copies, the cumulative sum, its buckets (NaN: 0)
         m = _emit(idx, m, i, np.int64(nw[i]))
         acc += cdf[i]
         cdf[i] = acc
+        first[max(0, min(np.int64(acc * scale), n - 1)) + 1] += 1
     k = n - m
-    if k == 0:
+    if k <= 0:
         return
+    for b in range(n):  # first[b]: how many cdf entries lie below bucket b
+        first[b + 1] += first[b]
     u, top = work[0, :k], cdf[n - 1]
     fill_random(s, u)
-    first, counts = start[:n + 1], start[n + 1:2 * n + 1]
-    first[:] = 0
-    counts[:] = 0
-    scale = n / top if top > 0 else 0.0
-    for i in range(n):  # first[b + 1]: how many cdf entries lie below bucket b + 1
-        first[max(0, min(np.int64(cdf[i] * scale), n - 1)) + 1] += 1  # NaN: bucket 0
-    for b in range(n):
-        first[b + 1] += first[b]
-    for j in range(k):
+    for j in range(k):  # a bucket holds about one entry, so three steps mostly suffice
         v = u[j] * top
         i = first[min(np.int64(u[j] * n), n - 1)]
-        for _ in range(3):  # a bucket holds about one entry: three steps without a branch
+        if i < 0:  # never (first ≥ 0): an exit that keeps LLVM from vectorising the loop,
+            break  # whose four dependent gathers a draw are slower than loads one at a time
+        for _ in range(3):
             i += np.int64((i < n) & (cdf[min(i, n - 1)] <= v))
-        while i < n and cdf[i] <= v:  # the rare rest, and round-off at bucket edges
+        pos[j] = i
+    counts = first[:n]
+    counts[:] = 0
+    for j in range(k):  # the rare rest, and round-off at bucket edges; then count
+        i, v = pos[j], u[j] * top
+        while i < n and cdf[i] <= v:
             i += 1
         while i > 0 and cdf[i - 1] > v:
             i -= 1
         counts[min(i, n - 1)] += 1
     for i in range(n):
         m = _emit(idx, m, i, counts[i])
+
+
+@njit(cache=True, error_model="numpy", fastmath=SUMS)
+def _floors(w, total, nw, frac):
+    """nw_i = floor(N w_i / total) and frac_i = N w_i / total − nw_i (SIMD, w_i · (N / total),
+    a multiply as the reference's); returns Σ nw."""
+    n, m, c = w.size, 0.0, w.size / total
+    for i in range(n):
+        v = w[i] * c
+        f = np.floor(v)
+        nw[i], frac[i] = f, v - f
+        m += f
+    return m
 
 
 @njit(cache=True, inline="always")
@@ -152,6 +170,6 @@ def _take(xs, idx, out):
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
 def _total(w):
     s = 0.0
-    for v in w:
-        s += v
+    for i in range(w.size):  # by index: LLVM vectorises this, not numba's array iterator
+        s += w[i]
     return s

@@ -9,7 +9,9 @@ Model, for frames k = 0 … n−1 (symbols as filters/gaussian.py; d the state s
 A camera pair whose innovation y = zc − Hc x⁻ has y ᵀ S⁻¹ y > gate, S = Hc P⁻ Hcᵀ + rc I, is not
 used (``gated[k]``). Rows are applied one at a time (for independent rows this equals the
 joint update). Smoothed covariances overwrite the filtered ones to keep memory at one
-(n, d, d) array.
+(n, d, d) array. ``filter_block`` and ``rts_block`` are the same two passes a block of frames
+at a time, for the checkpointed form whose memory does not grow with the session
+(fuse/smoother_blocks.py).
 """
 
 from __future__ import annotations
@@ -40,6 +42,38 @@ def _gate(x, P, H, z, r):
 
 
 @njit(cache=True)
+def _filter_step(x, P, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate, predict):
+    """(x, P, gated) of one frame: predict through (F, b, Q) unless ``predict`` is False (the
+    session's first frame), then the gated camera pair and the arm row."""
+    gated = False
+    if predict:
+        x = F @ x + b
+        P = F @ P @ F.T + Q
+    if use_c:
+        if _gate(x, P, Hc, zc, rc) > gate:
+            gated = True
+        else:
+            _scalar_update(x, P, Hc[0], zc[0], rc)
+            _scalar_update(x, P, Hc[1], zc[1], rc)
+    if use_k:
+        _scalar_update(x, P, Hk, zk, rk)
+    return x, 0.5 * (P + P.T), gated
+
+
+@njit(cache=True)
+def _rts_step(x, P, F, b, Q, xs, Ps):
+    """Rauch, Tung & Striebel (1965), frame k from frame k+1: gain = P Fᵀ (P⁻)⁻¹,
+    x^s = x + gain (x^s_{k+1} − x⁻), P^s = P + gain (P^s_{k+1} − P⁻) gainᵀ; (F, b, Q) the step
+    into frame k+1, (x, P) frame k's filtered state, (xs, Ps) frame k+1's smoothed one."""
+    xp = F @ x + b
+    FP = F @ P
+    Pp = FP @ F.T + Q
+    gain = np.linalg.solve(Pp, FP).T  # Pp symmetric: (Pp⁻¹ F P)ᵀ = P Fᵀ Pp⁻¹
+    Pn = P + gain @ (Ps - Pp) @ gain.T
+    return x + gain @ (xs - xp), 0.5 * (Pn + Pn.T)
+
+
+@njit(cache=True)
 def smooth(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate):
     """(xs (n, d), Ps (n, d, d), gated (n,) bool): the smoothed means and covariances."""
     n, d = F.shape[0], x0.size
@@ -48,29 +82,37 @@ def smooth(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate):
     gated = np.zeros(n, np.bool_)
     x, P = x0.copy(), P0.copy()
     for k in range(n):
-        if k > 0:
-            x = F[k] @ x + b[k]
-            P = F[k] @ P @ F[k].T + Q[k]
-        if use_c[k]:
-            if _gate(x, P, Hc[k], zc[k], rc) > gate:
-                gated[k] = True
-            else:
-                _scalar_update(x, P, Hc[k, 0], zc[k, 0], rc)
-                _scalar_update(x, P, Hc[k, 1], zc[k, 1], rc)
-        if use_k[k]:
-            _scalar_update(x, P, Hk[k], zk[k], rk)
-        P = 0.5 * (P + P.T)
+        x, P, gated[k] = _filter_step(x, P, F[k], b[k], Q[k], Hc[k], zc[k], use_c[k], rc,
+                                      Hk[k], zk[k], use_k[k], rk, gate, k > 0)
         xf[k] = x
         Pf[k] = P
-    # backwards (Rauch, Tung & Striebel 1965): gain_k = P_k F_{k+1}ᵀ (P⁻_{k+1})⁻¹,
-    # x^s_k = x_k + gain_k (x^s_{k+1} − x⁻_{k+1}), P^s_k = P_k + gain_k (P^s_{k+1} − P⁻_{k+1}) gain_kᵀ
-    for k in range(n - 2, -1, -1):
-        Fn = F[k + 1]
-        xp = Fn @ xf[k] + b[k + 1]
-        FP = Fn @ Pf[k]
-        Pp = FP @ Fn.T + Q[k + 1]
-        gain = np.linalg.solve(Pp, FP).T  # Pp symmetric: (Pp⁻¹ F P)ᵀ = P Fᵀ Pp⁻¹
-        xf[k] = xf[k] + gain @ (xf[k + 1] - xp)
-        Ps = Pf[k] + gain @ (Pf[k + 1] - Pp) @ gain.T
-        Pf[k] = 0.5 * (Ps + Ps.T)
+    for k in range(n - 2, -1, -1):  # backwards, the smoothed overwriting the filtered
+        xf[k], Pf[k] = _rts_step(xf[k], Pf[k], F[k + 1], b[k + 1], Q[k + 1], xf[k + 1], Pf[k + 1])
     return xf, Pf, gated
+
+
+@njit(cache=True)
+def filter_block(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate, first, m,
+                 xf, Pf, gated):
+    """The forward filter over the first m rows of a block of frames (row j: frame lo + j, F[j]
+    the step into it), from (x0, P0): frame lo − 1's filtered state, or, with ``first``, the
+    session's prior. Writes the filtered states into xf (≥ m, d), Pf (≥ m, d, d) and the gate's
+    decisions into gated (≥ m,); returns the last frame's (x, P)."""
+    x, P = x0.copy(), P0.copy()
+    for j in range(m):
+        x, P, gated[j] = _filter_step(x, P, F[j], b[j], Q[j], Hc[j], zc[j], use_c[j], rc,
+                                      Hk[j], zk[j], use_k[j], rk, gate, j > 0 or not first)
+        xf[j] = x
+        Pf[j] = P
+    return x, P
+
+
+@njit(cache=True)
+def rts_block(xf, Pf, m, F, b, Q, xs_next, Ps_next, last):
+    """Smooth a block's m filtered states (xf, Pf, overwritten) backwards; unless ``last`` (the
+    block ends the session) from the next frame's smoothed state (xs_next, Ps_next) through
+    the step into it, row m of (F, b, Q)."""
+    if not last:
+        xf[m - 1], Pf[m - 1] = _rts_step(xf[m - 1], Pf[m - 1], F[m], b[m], Q[m], xs_next, Ps_next)
+    for k in range(m - 2, -1, -1):
+        xf[k], Pf[k] = _rts_step(xf[k], Pf[k], F[k + 1], b[k + 1], Q[k + 1], xf[k + 1], Pf[k + 1])

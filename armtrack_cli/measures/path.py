@@ -24,7 +24,8 @@ def peak(v: np.ndarray, s: Settings) -> int:
 def onset_offset(v: np.ndarray, s: Settings) -> tuple[int, int]:
     """Onset: walking back from the first sample at 20 % of peak speed (s.min_segment_peak),
     the last sample above onset_fraction (2 %) of peak; offset: walking on from the last
-    sample at 20 %, likewise. A noise blip at rest that never reaches 20 % moves neither."""
+    sample at 20 %, likewise. A noise blip at rest that never reaches 20 % moves neither.
+    (The measures below take it as ``span`` where the caller has it already.)"""
     k = peak(v, s)
     high = np.flatnonzero(v >= s.min_segment_peak * v[k])
     low = v < s.onset_fraction * v[k]
@@ -35,34 +36,38 @@ def onset_offset(v: np.ndarray, s: Settings) -> tuple[int, int]:
     return int(a), int(b)
 
 
-def movement_time(t: np.ndarray, v: np.ndarray, s: Settings) -> float:
-    a, b = onset_offset(v, s)
+def movement_time(t: np.ndarray, v: np.ndarray, s: Settings, *,
+                  span: tuple[int, int] | None = None) -> float:
+    a, b = span or onset_offset(v, s)
     if b - a < 2:
         raise NotComputable("the movement is shorter than 3 samples")
     return float(t[b] - t[a])
 
 
-def time_to_peak(t: np.ndarray, v: np.ndarray, s: Settings) -> float:
-    a, _ = onset_offset(v, s)
+def time_to_peak(t: np.ndarray, v: np.ndarray, s: Settings, *,
+                 span: tuple[int, int] | None = None) -> float:
+    a, _ = span or onset_offset(v, s)
     return float(t[peak(v, s)] - t[a])
 
 
-def mean_speed(v: np.ndarray, s: Settings) -> float:
+def mean_speed(v: np.ndarray, s: Settings, *, span: tuple[int, int] | None = None) -> float:
     """Mean speed between onset and offset."""
-    a, b = onset_offset(v, s)
+    a, b = span or onset_offset(v, s)
     return float(np.mean(v[a:b + 1]))
 
 
-def path_length(p: np.ndarray, v: np.ndarray, s: Settings) -> float:
+def path_length(p: np.ndarray, v: np.ndarray, s: Settings, *,
+                span: tuple[int, int] | None = None) -> float:
     """Sum of the distances between consecutive samples from onset to offset, m."""
-    a, b = onset_offset(v, s)
+    a, b = span or onset_offset(v, s)
     return float(np.sum(np.linalg.norm(np.diff(p[a:b + 1], axis=0), axis=1)))
 
 
-def straightness(p: np.ndarray, v: np.ndarray, s: Settings) -> float:
+def straightness(p: np.ndarray, v: np.ndarray, s: Settings, *,
+                 span: tuple[int, int] | None = None) -> float:
     """Path length / straight-line distance from onset to offset (1 = straight)."""
-    a, b = onset_offset(v, s)
+    a, b = span = span or onset_offset(v, s)
     d = float(np.linalg.norm(p[b] - p[a]))
     if d < s.min_reach_m:
         raise NotComputable(f"start and end are {100 * d:.1f} cm apart (a return, not a reach)")
-    return path_length(p, v, s) / d
+    return path_length(p, v, s, span=span) / d

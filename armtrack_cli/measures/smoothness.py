@@ -24,9 +24,12 @@ def sparc(v: np.ndarray, fs: float, s: Settings = DEFAULT) -> float:
     2126; SPARC as revised in Balasubramanian et al. 2015, J NeuroEng Rehabil 12: 112)."""
     v = _check(v, fs)
     nfft = int(2 ** (np.ceil(np.log2(v.size)) + s.sparc_pad))  # zero padding
-    f = np.arange(nfft) * fs / nfft
-    mag = np.abs(np.fft.fft(v, nfft))
+    if s.sparc_fc_hz < fs / 2:  # a real signal's spectrum: the bins up to Nyquist say it all
+        mag = np.abs(np.fft.rfft(v, nfft))
+    else:
+        mag = np.abs(np.fft.fft(v, nfft))
     mag = mag / mag.max()  # normalised magnitude spectrum
+    f = np.arange(mag.size) * fs / nfft
     sel = f <= s.sparc_fc_hz
     f, mag = f[sel], mag[sel]
     keep = np.flatnonzero(mag >= s.sparc_amp_th)  # adaptive cut-off: last point above 0.05

@@ -65,22 +65,27 @@ def _try(f: Callable[[], float]) -> Value:
 
 
 def _path_values(t, p, v, fs: float, reach: bool, s: Settings) -> dict[str, Value]:
+    try:  # onset and offset once for every measure that needs them
+        span: tuple[int, int] | None = path.onset_offset(v, s)
+    except NotComputable:
+        span = None  # each measure below says why
+
     def moving() -> np.ndarray:
-        a, b = path.onset_offset(v, s)
+        a, b = span or path.onset_offset(v, s)
         return v[a:b + 1]
 
     out = {
         "wrist_peak_speed": _try(lambda: v[path.peak(v, s)]),
-        "wrist_mean_speed": _try(lambda: path.mean_speed(v, s)),
-        "time_to_peak_speed": _try(lambda: path.time_to_peak(t, v, s)),
-        "movement_time": _try(lambda: path.movement_time(t, v, s)),
-        "wrist_path_length": _try(lambda: path.path_length(p, v, s)),
+        "wrist_mean_speed": _try(lambda: path.mean_speed(v, s, span=span)),
+        "time_to_peak_speed": _try(lambda: path.time_to_peak(t, v, s, span=span)),
+        "movement_time": _try(lambda: path.movement_time(t, v, s, span=span)),
+        "wrist_path_length": _try(lambda: path.path_length(p, v, s, span=span)),
         "movement_units": _try(lambda: smoothness.movement_units(t, moving(), s)[0]),
         "sparc": _try(lambda: smoothness.sparc(moving(), fs, s)),
         "ldlj": _try(lambda: smoothness.ldlj(moving(), fs)),
     }
     if reach:
-        out["straightness"] = _try(lambda: path.straightness(p, v, s))
+        out["straightness"] = _try(lambda: path.straightness(p, v, s, span=span))
     return out
 
 
@@ -153,17 +158,18 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
     """SD of every measure over draws from the posterior (uncertainty.py)."""
     if inp.wrist_sd is None and inp.angles_sd is None:
         return {}
-    e_w = smooth_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else None
+    none = iter(lambda: None, 0)  # no posterior for this input: None for every draw
+    e_w = smooth_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else none
     e_a = (smooth_draws(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
-           if inp.angles_sd is not None else None)
+           if inp.angles_sd is not None else none)
     draws = []
-    for i in range(s.draws):
+    for _, ew, ea in zip(range(s.draws), e_w, e_a):
         d = inp
-        if e_w is not None:  # the elbow is the wrist moved by a known vector: the same error
-            d = replace(d, wrist=inp.wrist + e_w[i],
-                        elbow=None if inp.elbow is None else inp.elbow + e_w[i])
-        if e_a is not None:
-            d = replace(d, wrist_angles=inp.wrist_angles + e_a[i])
+        if ew is not None:  # the elbow is the wrist moved by a known vector: the same error
+            d = replace(d, wrist=inp.wrist + ew,
+                        elbow=None if inp.elbow is None else inp.elbow + ew)
+        if ea is not None:
+            d = replace(d, wrist_angles=inp.wrist_angles + ea)
         draws.append(values(d, s, windows)[0])
     return {k: spread([dr.get(k, "") for dr in draws]) for k in keys}
 

@@ -13,29 +13,35 @@ error is √2·σ/τc. The measure's uncertainty is the SD of its values over s.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from armtrack_cli.measures.base import Settings
 
 
-def smooth_draws(t: np.ndarray, sd: np.ndarray, s: Settings) -> np.ndarray:
-    """(draws, N, d) zero-mean errors, marginal SD sd (N, d) (NaN -> 0), correlation
-    exp(−τ²/τc²) in time: white noise smoothed by a Gaussian kernel of SD τc/2 (in frames at
-    the median frame interval; circular, so every frame has unit variance) and rescaled by
-    1/√(Σ kernel²)."""
+def smooth_draws(t: np.ndarray, sd: np.ndarray, s: Settings) -> Iterator[np.ndarray]:
+    """s.draws zero-mean errors (N, d), one at a time (memory stays at one draw however long
+    the session), marginal SD sd (N, d) (NaN -> 0), correlation exp(−τ²/τc²) in time: white
+    noise smoothed by a Gaussian kernel of SD τc/2 (in frames at the median frame interval;
+    circular, so every frame has unit variance) and rescaled by 1/√(Σ kernel²). Draw i is the
+    i-th (N, d) block of one seeded stream of standard normals."""
     rng = np.random.default_rng(s.seed)
     sd = np.nan_to_num(np.asarray(sd, float), nan=0.0)
     n, d = sd.shape
     dt = float(np.median(np.diff(t))) if n > 1 else 1.0
     sigma = 0.5 * s.draw_corr_s / dt if np.isfinite(dt) and dt > 0 else 0.0
-    w = rng.standard_normal((s.draws, n, d))
-    if sigma < 0.1:
-        return w * sd[None]
-    delta = np.zeros(n)
-    delta[0] = 1.0
-    gain = np.sqrt(np.sum(gaussian_filter1d(delta, sigma, mode="wrap") ** 2))
-    return gaussian_filter1d(w, sigma, axis=1, mode="wrap") / gain * sd[None]
+    gain = 1.0
+    if sigma >= 0.1:
+        delta = np.zeros(n)
+        delta[0] = 1.0
+        gain = np.sqrt(np.sum(gaussian_filter1d(delta, sigma, mode="wrap") ** 2))
+    for _ in range(s.draws):
+        w = rng.standard_normal((n, d))
+        if sigma >= 0.1:
+            w = gaussian_filter1d(w, sigma, axis=0, mode="wrap") / gain
+        yield w * sd
 
 
 def spread(samples: list[float]) -> float:

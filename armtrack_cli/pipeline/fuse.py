@@ -21,11 +21,8 @@ from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
-from armtrack_cli.pipeline import arm_model
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
-from armtrack_cli.pipeline.kinematics import kinematics_table
-from armtrack_cli.pipeline.palm import fuse_palm
 from armtrack_cli.session.arm_file import write_arm_estimate
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
@@ -77,6 +74,7 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
                    field=session.imu.field)
     ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
+    ok = slice(None) if ok.all() else ok  # every sample usable: views, not copies
     q_imu = imu.quat[ok]
     a_w = models.accel_world(q_imu, imu.acc[ok])  # Tao & Hu eq. 4
     arm = None
@@ -109,7 +107,11 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     session = load_session(path)
     s, where = settings_for(recipe, sets, method=method, particles=particles, seed=seed,
                             kind=session.kind)
+    # what only some sessions or the last step need is imported there: a stage's peak memory
+    # is its libraries' (~200 MB) and its data's at once (issue 15)
     if s.method in PALM_METHODS:  # Cordella et al.: pipeline/palm.py
+        from armtrack_cli.pipeline.palm import fuse_palm
+
         return fuse_palm(session, out_dir(session, out), *resolve_recipe(recipe, sets))
     if "arm" in NEEDS[s.method] and session.arm is None:
         raise ConfigError(session.toml_path, f"has no [arm] section, which {s.method} needs",
@@ -118,8 +120,10 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     p = prepare(session, dest, s)
     auto = None
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
+        from armtrack_cli.pipeline import arm_model
+
         auto, p = arm_model.estimate_with_offset(session, p, lambda known: prepare(known, dest, s),
-                                                   s)
+                                                 s)
         session = arm_model.with_arm(session, auto.shoulder, auto.upper_arm_m, auto.forearm_m)
         p = dataclasses.replace(p, arm=dataclasses.replace(
             p.arm, shoulder=auto.shoulder, L1=auto.upper_arm_m, L2=auto.forearm_m))
@@ -165,21 +169,31 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
                 "imu_offset_s": p.imu_offset}
     q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
     q_WB[p.frames] = inp.q_WB if est.q_WB is None else est.q_WB
-    kin = kinematics_table(table, session, q_WB=q_WB)
-    with output_set():
-        write_table(dest / name, table, command="fuse", settings=settings)
-        write_table(dest / f"kinematics-{s.method}.csv", kin, command="fuse", settings=settings)
-        if auto:
-            write_arm_estimate(dest, auto.as_dict())
-    n = int(p.frames.size)
+    n, summary, offset = int(p.frames.size), est.summary or {}, p.imu_offset
+    used = int(np.isfinite(inp.z).all(axis=1).sum())
+    del est, p, inp  # the filter's per-frame arrays, before the measures' draws
+    _write(dest, s.method, table, session, q_WB, settings, auto)
     return {"method": s.method, "trajectory": str(dest / name), "frames": n,
-            "detections_used": int(np.isfinite(inp.z).all(axis=1).sum()),
+            "detections_used": used,
             "seconds": round(elapsed, 3), "frames_per_s": round(n / max(elapsed, 1e-9), 1),
             "cpu_seconds": round(cpu, 3), "kernel_setup_s": round(setup, 3),
             "initial_wrist_m": [round(float(v), 4) for v in x0[:3]], "initialised_from": how,
-            "frames_beyond_reach": int(far.sum()), **guards, **(est.summary or {}),
+            "frames_beyond_reach": int(far.sum()), **guards, **summary,
             **({"arm_auto": auto.as_dict()} if auto else {}),
-            "imu_offset_s": p.imu_offset}
+            "imu_offset_s": offset}
+
+
+def _write(dest: Path, method: str, table, session: Session, q_WB: np.ndarray,
+           settings: dict, auto) -> None:
+    """The trajectory, its measures (kinematics-METHOD.csv) and the auto arm, all or none."""
+    from armtrack_cli.pipeline.kinematics import kinematics_table
+
+    kin = kinematics_table(table, session, q_WB=q_WB)
+    with output_set():
+        write_table(dest / f"trajectory-{method}.csv", table, command="fuse", settings=settings)
+        write_table(dest / f"kinematics-{method}.csv", kin, command="fuse", settings=settings)
+        if auto:
+            write_arm_estimate(dest, auto.as_dict())
 
 
 def detection_counts(codes: np.ndarray | None) -> dict[str, int]:

@@ -11,6 +11,7 @@ import contextvars
 import errno
 import json
 import os
+import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -106,12 +107,34 @@ def _jsonable(o: Any) -> Any:
 def write_table(path: str | Path, table: pd.DataFrame, *, command: str,
                 settings: dict[str, Any] | None = None, float_format: str = "%.6f") -> Path:
     """CSV (NaN written as empty cells: missing, never zero) plus its provenance sidecar."""
-    text = table.to_csv(index=False, float_format=float_format, lineterminator="\n")
+    text = (_float_csv(table, float_format) if _all_float(table)
+            else table.to_csv(index=False, float_format=float_format, lineterminator="\n"))
     out = write_text(path, text)
     write_json(Path(path).with_suffix(".meta.json"),
                {"armtrack_version": __version__, "command": command, "settings": settings or {}})
     return out
 
+
+def _all_float(table: pd.DataFrame) -> bool:
+    """Every column float64 and every name plain (nothing a CSV would quote)."""
+    return (len(table.columns) > 0 and all(str(d) == "float64" for d in table.dtypes)
+            and not any(set(str(c)) & set(',"\n\r') for c in table.columns))
+
+
+def _float_csv(table: pd.DataFrame, float_format: str) -> str:
+    """What pandas' to_csv(index=False, float_format=…) writes for an all-float table, one
+    % per row instead of one per cell (a 60-minute trajectory has 3 million cells): the same
+    % formatting, NaN as an empty cell."""
+    row = ",".join([float_format] * table.shape[1])
+    a = table.to_numpy()
+    text = [",".join(map(str, table.columns)) + "\n"]
+    for lo in range(0, len(a), 4096):  # a block of rows at a time: bounded Python objects
+        text.append(_NAN_CELL.sub("", "".join(row % tuple(r) + "\n"
+                                              for r in a[lo:lo + 4096].tolist())))
+    return "".join(text)
+
+
+_NAN_CELL = re.compile(r"(?<![^,\n])nan(?![^,\n])")  # a whole cell "nan"
 
 
 def write_npz(path: str | Path, arrays: dict[str, Any]) -> Path:

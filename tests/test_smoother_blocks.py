@@ -1,0 +1,111 @@
+"""The checkpointed smoother (fuse/smoother_blocks.py) against the plain pass it replaces
+(fuse/smoother_kernel.smooth, itself tested against batch least squares in
+test_arm_smoother.py): the same means, covariances and gate decisions, for block sizes that do
+and do not divide the session, on a random linear model with outliers and on a session's own
+linearised arm-smoother model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armtrack_cli.core import quaternion as quat
+from armtrack_cli.core.streams import CameraModel
+from armtrack_cli.fuse import arm_smoother, imu_fold, models
+from armtrack_cli.fuse.settings import FuseSettings
+from armtrack_cli.fuse.smoother_blocks import smooth_blocked
+from armtrack_cli.fuse.smoother_kernel import smooth
+
+
+def _random_problem(rng, n=700, d=6):
+    F = np.eye(d) + 0.05 * rng.standard_normal((n, d, d))
+    b = rng.standard_normal((n, d))
+    A = rng.standard_normal((n, d, d))
+    Q = A @ np.swapaxes(A, 1, 2) * 0.05 + 0.01 * np.eye(d)
+    Hc, Hk = rng.standard_normal((n, 2, d)), rng.standard_normal((n, d))
+    zc, zk = rng.standard_normal((n, 2)), rng.standard_normal(n)
+    zc[rng.random(n) < 0.05] += 50.0  # outliers for the χ² gate
+    use_c, use_k = rng.random(n) < 0.8, rng.random(n) < 0.5
+    return rng.standard_normal(d), np.diag(rng.uniform(0.5, 2.0, d)), (F, b, Q, Hc, zc, use_c,
+                                                                         Hk, zk, use_k)
+
+
+def _blocked(x0, P0, arrays, rc, rk, gate, block):
+    n, d = arrays[0].shape[0], x0.size
+    xs, Ps = np.full((n, d), np.nan), np.full((n, d, d), np.nan)
+
+    def keep(lo, hi, x, P):
+        xs[lo:hi], Ps[lo:hi] = x, P
+
+    gated = smooth_blocked(x0, P0, lambda lo, hi: tuple(a[lo:hi] for a in arrays), n, rc=rc,
+                           rk=rk, gate=gate, keep=keep, block=block)
+    return xs, Ps, gated
+
+
+def _plain(x0, P0, arrays, rc, rk, gate):
+    F, b, Q, Hc, zc, use_c, Hk, zk, use_k = arrays
+    return smooth(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate)
+
+
+@pytest.mark.parametrize("block", [1, 64, 100, 700, 5000])
+def test_blocks_equal_the_plain_pass_on_a_random_model(block):
+    x0, P0, arrays = _random_problem(np.random.default_rng(3))
+    xs, Ps, gated = _plain(x0, P0, arrays, 0.3, 0.2, 9.0)
+    xb, Pb, gb = _blocked(x0, P0, arrays, 0.3, 0.2, 9.0, block)
+    assert gated.sum() > 10 and np.array_equal(gb, gated)
+    assert np.abs(xb - xs).max() < 1e-9 and np.abs(Pb - Ps).max() < 1e-9
+
+
+def test_blocks_equal_the_plain_pass_on_a_session_model():
+    """The arm smoother's own model (IMU fold with the gyro's orientation track, the camera
+    and arm rows linearised about a trajectory) over 40 s at 30 fps: positions within 1e-9 m."""
+    rng = np.random.default_rng(8)
+    t = np.arange(0, 40, 0.01)
+    q = quat.normalize(np.array([1.0, 0.1, 0, 0]) + 0.02 * rng.standard_normal((t.size, 4)))
+    f = rng.standard_normal((t.size, 3)) * 0.5 + [0, 0, 9.81]
+    w = rng.standard_normal((t.size, 3)) * 0.1
+    tf = np.arange(0.05, 39.9, 1 / 30)
+    n = tf.size
+    s = FuseSettings()
+    fd = imu_fold.fold(t, q, f, tf, hold=s.imu_hold)
+    track = imu_fold.orientation_track(t, q, w, tf)
+    F, b, Q = arm_smoother.process(fd, s, None, 0.01, track)
+    cam = models.Projection(_camera())
+    arm = models.Arm(shoulder=np.array([0.1, 0.5, 0.3]), L1=0.3, L2=0.27,
+                     forearm_B=np.array([0.0, 1.0, 0.0]))
+    X = np.zeros((n, 15))
+    X[:, :3] = [0.3, 0.2, 0.1] + 0.05 * np.sin(tf)[:, None]
+    X[:, 3:6] = 0.05 * np.cos(tf)[:, None]
+    z = cam(X[:, :3]) + rng.standard_normal((n, 2))
+    z[rng.random(n) < 0.1] = np.nan
+    Hc, zc, Hk, zk = arm_smoother.linearise(X, z, q[::3][:n], cam, arm, arm.shoulder)
+    arrays = (F, b, Q, Hc, zc, np.isfinite(z).all(axis=1), Hk, zk, np.ones(n, bool))
+    x0, P0 = arm_smoother.prior(np.r_[X[0, :6]], np.eye(6) * 0.01, s, None, True)
+    xs, Ps, gated = _plain(x0, P0, arrays, 4.0, 1e-4, 13.8)
+    xb, Pb, gb = _blocked(x0, P0, arrays, 4.0, 1e-4, 13.8, 256)
+    assert np.array_equal(gb, gated)
+    assert np.abs(xb[:, :3] - xs[:, :3]).max() < 1e-9
+    assert np.abs(xb - xs).max() < 1e-9 and np.abs(Pb - Ps).max() < 1e-12
+
+
+def _camera():
+    K = np.array([[600.0, 0, 320], [0, 600, 240], [0, 0, 1]])
+    R = np.array([[1.0, 0, 0], [0, -1, 0], [0, 0, -1]])  # looking down at the table
+    return CameraModel(K=K, dist=np.array([-0.2, 0.05, 0.001, -0.002, 0.01]), width=640,
+                       height=480, R_WC=R, T_WC=-R @ np.array([0.3, 0.2, 1.0]))
+
+
+@pytest.mark.parametrize("hold", ["sample", "linear"])
+def test_fold_in_chunks_equals_one_chunk(hold, monkeypatch):
+    """imu_fold.fold a few pieces at a time (frames whose pieces straddle chunks included)
+    equals the fold of all pieces at once."""
+    rng = np.random.default_rng(2)
+    t = np.arange(0, 5, 0.01) + 0.003
+    q = quat.normalize(np.array([1.0, 0.2, 0, 0]) + 0.1 * rng.standard_normal((t.size, 4)))
+    f = rng.standard_normal((t.size, 3)) + [0, 0, 9.81]
+    tf = np.arange(0.1, 4.9, 1 / 30)
+    whole = imu_fold.fold(t, q, f, tf, hold=hold)
+    monkeypatch.setattr(imu_fold, "FOLD_CHUNK", 7)
+    parts = imu_fold.fold(t, q, f, tf, hold=hold)
+    for name in ("dp", "dv", "A_p", "A_v", "B_p", "B_v"):
+        assert np.abs(getattr(parts, name) - getattr(whole, name)).max() < 1e-14, name
