@@ -15,14 +15,18 @@ from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_kernel import smooth
 
 
-def _linear_problem(rng, n=20, d=7):
-    F = np.eye(d) + 0.1 * rng.standard_normal((n, d, d))
+def _linear_problem(rng, n=20, d=7, f_scale=0.1, p_camera=0.7, outliers=0.0):
+    """A random linear-Gaussian model in the smoother kernel's arguments (``outliers``: the
+    share of camera pairs moved 50 σ, for the χ² gate)."""
+    F = np.eye(d) + f_scale * rng.standard_normal((n, d, d))
     b = rng.standard_normal((n, d))
     A = rng.standard_normal((n, d, d))
     Q = A @ np.swapaxes(A, 1, 2) * 0.05 + 0.01 * np.eye(d)
     Hc, Hk = rng.standard_normal((n, 2, d)), rng.standard_normal((n, d))
     zc, zk = rng.standard_normal((n, 2)), rng.standard_normal(n)
-    use_c, use_k = rng.random(n) < 0.7, rng.random(n) < 0.5
+    if outliers:
+        zc[rng.random(n) < outliers] += 50.0
+    use_c, use_k = rng.random(n) < p_camera, rng.random(n) < 0.5
     x0, P0 = rng.standard_normal(d), np.diag(rng.uniform(0.5, 2.0, d))
     return x0, P0, F, b, Q, Hc, zc, use_c, 0.3, Hk, zk, use_k, 0.2
 

@@ -15,19 +15,13 @@ from armtrack_cli.fuse import arm_smoother, imu_fold, models
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
 from armtrack_cli.fuse.smoother_kernel import smooth
+from tests.test_arm_smoother import _linear_problem
 
 
 def _random_problem(rng, n=700, d=6):
-    F = np.eye(d) + 0.05 * rng.standard_normal((n, d, d))
-    b = rng.standard_normal((n, d))
-    A = rng.standard_normal((n, d, d))
-    Q = A @ np.swapaxes(A, 1, 2) * 0.05 + 0.01 * np.eye(d)
-    Hc, Hk = rng.standard_normal((n, 2, d)), rng.standard_normal((n, d))
-    zc, zk = rng.standard_normal((n, 2)), rng.standard_normal(n)
-    zc[rng.random(n) < 0.05] += 50.0  # outliers for the χ² gate
-    use_c, use_k = rng.random(n) < 0.8, rng.random(n) < 0.5
-    return rng.standard_normal(d), np.diag(rng.uniform(0.5, 2.0, d)), (F, b, Q, Hc, zc, use_c,
-                                                                         Hk, zk, use_k)
+    x0, P0, F, b, Q, Hc, zc, use_c, _, Hk, zk, use_k, _ = _linear_problem(
+        rng, n, d, f_scale=0.05, p_camera=0.8, outliers=0.05)
+    return x0, P0, (F, b, Q, Hc, zc, use_c, Hk, zk, use_k)
 
 
 def _blocked(x0, P0, arrays, rc, rk, gate, block):
