@@ -193,19 +193,25 @@ def test_steps_compose_exactly():
     np.testing.assert_allclose(coarse.dv, direct.dv, atol=1e-12)
 
 
+def _session_with(out: Path, dest: Path, line) -> Path:
+    """A copy of session ``out`` in ``dest`` (its files linked) whose session.toml has each
+    line passed through ``line``."""
+    dest.mkdir()
+    for f in out.iterdir():
+        if f.is_file() and f.name != "session.toml":
+            (dest / f.name).symlink_to(f)
+    text = [line(ln) for ln in (out / "session.toml").read_text().splitlines()]
+    (dest / "session.toml").write_text("\n".join(text) + "\n")
+    return dest
+
+
 def test_fuse_with_an_auto_arm_end_to_end(mocap_session, tmp_path):
     """`[arm] … = "auto"`: fuse estimates the arm first, says so, writes arm-auto.json beside
     the trajectory, and info shows it; the estimate's lengths are near the recording's."""
     out, _ = mocap_session
-    auto = tmp_path / "auto"
-    auto.mkdir()
-    for f in out.iterdir():
-        if f.is_file() and f.name != "session.toml":
-            (auto / f.name).symlink_to(f)
-    text = (out / "session.toml").read_text().splitlines()
-    text = [f'{ln.split(" = ")[0]} = "auto"' if ln.split(" = ")[0] in (
-        "upper_arm_m", "forearm_m", "shoulder_m") else ln for ln in text]
-    (auto / "session.toml").write_text("\n".join(text) + "\n")
+    auto = _session_with(out, tmp_path / "auto", lambda ln: f'{ln.split(" = ")[0]} = "auto"'
+                         if ln.split(" = ")[0] in ("upper_arm_m", "forearm_m", "shoulder_m")
+                         else ln)
     r = run_cli("info", auto)
     assert r.exit_code == 0 and 'L1 "auto"' in r.output and "not run yet" in r.output
     for stage in ("calibrate", "detect", "fuse"):
@@ -238,18 +244,11 @@ def test_a_drifting_arm_lets_go_of_a_wrongly_declared_shoulder(mocap_session, tm
     drifting arm, starting at the declared one, moves its shoulder towards the true one and
     the wrist error falls (the compare of each against the recording)."""
     out, _ = mocap_session
-    wrong = tmp_path / "wrong"
-    wrong.mkdir()
-    for f in out.iterdir():
-        if f.is_file() and f.name != "session.toml":
-            (wrong / f.name).symlink_to(f)
-    s = load_session(out)
-    true_sh = np.array(s.arm.shoulder_m)
+    true_sh = np.array(load_session(out).arm.shoulder_m)
     declared = true_sh + [0.0, 0.06, 0.0]
-    text = [f"shoulder_m = [{', '.join(f'{v:.4f}' for v in declared)}]"
-            if ln.startswith("shoulder_m = ") else ln
-            for ln in (out / "session.toml").read_text().splitlines()]
-    (wrong / "session.toml").write_text("\n".join(text) + "\n")
+    wrong = _session_with(out, tmp_path / "wrong", lambda ln: (
+        f"shoulder_m = [{', '.join(f'{v:.4f}' for v in declared)}]"
+        if ln.startswith("shoulder_m = ") else ln))
     for stage in ("calibrate", "detect"):
         assert run_cli(stage, wrong).exit_code == 0
     fixed, _ = _wrist_rmse_cm(wrong)
