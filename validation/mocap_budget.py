@@ -17,6 +17,7 @@ geometry of the arm constraint against the recording, each measured apart from t
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -93,18 +94,120 @@ def walk_rates(truths: list[Path], lag_s: float = 1.0) -> tuple[float, float]:
     return float(np.median(sh)), float(np.median(ln))
 
 
-def arm_priors(truths: list[Path]) -> tuple[float, float]:
-    """How far the declared arm (the shoulder point's mean, |E − S|'s median) is from the
-    sphere the elbow turns about, measured on recordings: the RMS over trials (and axes) of the
-    hindsight sphere's centre less the declared shoulder, and of its radius less the declared
-    L1 (m). validation/from_mocap.py takes them from the trials other than the one scored."""
+def side_sign(truth_npz: Path) -> float:
+    """−1 for a left arm, +1 for a right one (the session's [session] side, beside OUT.truth.npz):
+    W's x is across the subject, so an anatomical offset along it changes sign with the side."""
+    toml = truth_npz.parent / truth_npz.name.removesuffix(".truth.npz") / "session.toml"
+    return -1.0 if re.search(r'^side = "left"', toml.read_text(), re.M) else 1.0
+
+
+def arm_priors(truths: list[Path]) -> tuple[float, ...]:
+    """Where the sphere the elbow turns about lies from the declared arm (the shoulder point's
+    mean, |E − S|'s median), measured on recordings: for each trial the hindsight sphere's
+    centre less the declared shoulder (x as for a right arm) and its radius less the declared
+    L1. Returns (SD per axis of the centre's offset about its mean, SD of the radius', mean
+    offset x (right arm), y, z, mean radius offset), m: the drifting arm's prior is centred on
+    the declared arm plus the mean offset, as wide as the trials spread about it.
+    validation/from_mocap.py takes them from the trials other than the one scored."""
     dc, dr = [], []
     for path in truths:
         tr = np.load(path)
         centre, radius = sphere_fit(tr["frame_elbow"])
-        dc.append(centre - tr["arm"][:3])
+        dc.append((centre - tr["arm"][:3]) * [side_sign(path), 1.0, 1.0])
         dr.append(radius - tr["arm"][3])
-    return float(np.sqrt(np.mean(np.square(dc)))), float(np.sqrt(np.mean(np.square(dr))))
+    mc, mr = np.mean(dc, axis=0), float(np.mean(dr))
+    return (float(np.sqrt(np.mean(np.square(np.array(dc) - mc)))),
+            float(np.sqrt(np.mean(np.square(np.array(dr) - mr)))), *map(float, mc), mr)
+
+
+STILL_M_S = 0.02  # "the hand rests" for the error split: true wrist speed below 2 cm/s
+
+
+def where(est: np.ndarray, truth_npz: Path, reported: np.ndarray) -> dict:
+    """Where the wrist error of one run is (cm): est (n, 3) m at the session's frames against
+    the truth's frame_wrist, split along the true camera ray (its mean: + away from the camera)
+    and across it, frames with a detection (``reported`` (n,) bool) and without, frames where
+    the true wrist is still (speed < STILL_M_S) and moving."""
+    tr = np.load(truth_npz)
+    n = min(len(est), tr["frame_wrist"].shape[0])
+    W, e = tr["frame_wrist"][:n], est[:n] - tr["frame_wrist"][:n]
+    ray = W - _camera_centre(tr)
+    ray /= np.linalg.norm(ray, axis=1)[:, None]
+    along = np.einsum("ni,ni->n", e, ray)
+    across = np.linalg.norm(e - along[:, None] * ray, axis=1)
+    err = np.linalg.norm(e, axis=1)
+    speed = np.interp(tr["frame_t"][:n], tr["t"], np.linalg.norm(tr["wrist_vel"], axis=1))
+    still, seen = speed < STILL_M_S, np.asarray(reported[:n], bool)
+
+    def rms(x, m):
+        return float(np.sqrt(np.mean(x[m] ** 2)) * 100) if m.any() else float("nan")
+
+    every = np.ones(n, bool)
+    return {"rmse": rms(err, every), "along_mean": float(along.mean() * 100),
+            "along": rms(along, every), "across": rms(across, every),
+            "seen": rms(err, seen), "hidden": rms(err, ~seen), "n_hidden": int((~seen).sum()),
+            "still": rms(err, still), "moving": rms(err, ~still), "n_still": int(still.sum()),
+            "n": n}
+
+
+def true_imu_text(text: str, q_true: np.ndarray, acc_bias: np.ndarray) -> str:
+    """An Xsens MT Manager export (the simulator's imu.txt) with its orientation replaced by
+    the true one (δθ = 0) and the accelerometer's bias removed (b_a = 0); noise kept. Rows are
+    the simulator's samples in order (from-mocap sessions drop none)."""
+    lines = text.splitlines()
+    k = next(i for i, line in enumerate(lines) if not line.startswith("//"))
+    cols = lines[k].split("\t")
+    acc = [cols.index(f"Acc_{a}") for a in "XYZ"]
+    qc = [cols.index(f"Quat_q{i}") for i in range(4)]
+    rows = lines[k + 1:]
+    if len(rows) != len(q_true):
+        raise ValueError(f"{len(rows)} IMU rows but {len(q_true)} true orientations")
+    out = lines[:k + 1]
+    for row, q in zip(rows, q_true):
+        cells = row.split("\t")
+        for j, b in zip(acc, acc_bias):
+            cells[j] = f"{float(cells[j]) - b:.6f}"
+        for j, v in zip(qc, q):
+            cells[j] = f"{v:.6f}"
+        out.append("\t".join(cells))
+    return "\n".join(out) + "\n"
+
+
+def with_truth(folder: Path, out: Path, dest: Path, *, camera: bool = False,
+               detections: bool = False, imu: bool = False) -> tuple[Path, Path]:
+    """A copy of session ``folder`` (its files linked) and of its stage outputs ``out``
+    (camera.yaml, detections.csv) with parts of the input replaced by the simulator's truth
+    (OUT.truth.npz beside the session): the camera's true pose, the true wrist pixel on every
+    frame `detect` reported, the IMU's true orientation and no accelerometer bias. Returns
+    (session, outputs) for `armtrack fuse`."""
+    from armtrack_cli.core.streams import CameraModel
+    from armtrack_cli.session.camera_yaml import read_camera_yaml, write_camera_yaml
+
+    tr = np.load(folder.parent / f"{folder.name}.truth.npz")
+    session, work = dest / folder.name, dest / folder.name / "out"
+    work.mkdir(parents=True)
+    for f in folder.iterdir():
+        if f.is_file() and not (imu and f.name == "imu.txt"):
+            (session / f.name).symlink_to(f.resolve())
+    if imu:
+        (session / "imu.txt").write_text(true_imu_text((folder / "imu.txt").read_text(),
+                                                       tr["imu_q_true"], tr["acc_bias"]))
+    cam = read_camera_yaml(out / "camera.yaml")
+    if camera:
+        cam = CameraModel(cam.K, cam.dist, cam.width, cam.height, tr["R_WC"], tr["T_WC"],
+                          cam.reprojection_error_px)
+    write_camera_yaml(work / "camera.yaml", cam)
+    det = (out / "detections.csv").read_text().splitlines()
+    if detections:
+        head, px = det[0].split(","), tr["frame_wrist_px"]
+        iu, iv, iok, ifr = (head.index(c) for c in ("u", "v", "ok", "frame"))
+        for i in range(1, len(det)):
+            c = det[i].split(",")
+            if c[iok] == "1" and int(c[ifr]) < len(px):
+                c[iu], c[iv] = (f"{v:.6f}" for v in px[int(c[ifr])])
+                det[i] = ",".join(c)
+    (work / "detections.csv").write_text("\n".join(det) + "\n")
+    return session, work
 
 
 def detection(folder: Path, truth_npz: Path) -> dict:
@@ -138,21 +241,61 @@ def budget_row(name: str, geo: dict, *smoothed: float) -> str:
     return f"| {name} | {g('declared')} | {g('moving')} | {g('hindsight')} | {cells} |"
 
 
+WHERE_HEADER = ["| session | scored | along the ray, mean | across, RMS | frames with / without a "
+                "detection (without) | hand still / moving (still) | true camera pose | + exact "
+                "detections | + true δθ, b_a | all true, no arm | all true, no rest |",
+                "|---|---|---|---|---|---|---|---|---|---|---|"]
+
+
+def where_row(name: str, w: dict, truth_runs: list[float]) -> str:
+    """``where``'s split of the scored run, then the wrist RMSE as the truth replaces inputs."""
+    def f(x):
+        return "—" if np.isnan(x) else f"{x:.2f}"
+    cells = " | ".join(f(x) for x in truth_runs)
+    return (f"| {name} | {w['rmse']:.2f} | {w['along_mean']:+.2f} | {w['across']:.2f} | "
+            f"{f(w['seen'])} / {f(w['hidden'])} ({w['n_hidden']}) | {f(w['still'])} / "
+            f"{f(w['moving'])} ({w['n_still']}) | {cells} |")
+
+
 def rates_line(rates: list[tuple[float, ...]]) -> str:
     """The drifting arm's settings used, each trial's from the other trials (walk_rates,
     arm_priors)."""
-    sh, ln, psh, pln = np.array(rates).T * 100
+    sh, ln, psh, pln, dx, dy, dz, dl = np.array(rates).T * 100
     return (f"The drifting arm's settings, each trial's measured on the other six recordings: "
             f"random walks (median over trials of the RMS change over 1 s, per √s) of the "
             f"shoulder {sh.min():.2f}-{sh.max():.2f} cm/√s per axis and of the upper arm's length "
-            f"{ln.min():.2f}-{ln.max():.2f} cm/√s; priors (RMS over trials of the hindsight "
-            f"sphere's centre less the declared shoulder, and of its radius less the declared "
-            f"L1) {psh.min():.1f}-{psh.max():.1f} cm per axis and {pln.min():.1f}-{pln.max():.1f} "
-            f"cm. The defaults (`shoulder_walk_m_s` 0.011, `upper_arm_walk_m_s` 0.023, "
-            f"`shoulder_sd_m` 0.11, `upper_arm_sd_m` 0.06) are the same measures over all seven.")
+            f"{ln.min():.2f}-{ln.max():.2f} cm/√s; the prior's centre, the declared arm moved by "
+            f"the mean over trials of the hindsight sphere's centre less the declared shoulder "
+            f"(x for a right arm, mirrored for the left) and of its radius less the declared "
+            f"L1: x {dx.min():+.1f} to {dx.max():+.1f}, y {dy.min():+.1f} to {dy.max():+.1f}, "
+            f"z {dz.min():+.1f} to {dz.max():+.1f} cm, radius {dl.min():+.1f} to "
+            f"{dl.max():+.1f} cm (the elbow turns about a point behind and below the shoulder "
+            f"landmark, on a wider sphere); its SDs, the trials' spread about that mean, "
+            f"{psh.min():.1f}-{psh.max():.1f} cm per axis and {pln.min():.1f}-{pln.max():.1f} cm. "
+            f"The defaults (`shoulder_walk_m_s` 0.011, `upper_arm_walk_m_s` 0.023, "
+            f"`shoulder_sd_m` 0.11, `upper_arm_sd_m` 0.06, offsets 0: the declared arm) are "
+            f"not these: a lab without such recordings declares its arm as it measures it.")
 
 
-def section(rays: list[str], budget: list[str], rates: list | None = None) -> list[str]:
+def truth_section(truths: list[str]) -> list[str]:
+    """The error budget of the scored run (validation/from_mocap.py truth_row), and its
+    reading."""
+    return [
+        "Where the scored run's error is, and what bounds it: wrist 3-D RMSE (cm) of the drifting "
+        "arm + rest with the declared arm, split along the true camera ray (its mean; − towards "
+        "the camera) and across it, over frames with and without a detection, and over frames "
+        f"where the true wrist is still (below {STILL_M_S * 100:.0f} cm/s) and moving; then the "
+        "same run with the simulator's truth replacing its input, one part more at a time: the "
+        "camera's true pose (instead of the board's, from the video's first frame), the true "
+        "wrist pixel on every frame `detect` reported, the IMU's true orientation and no "
+        "accelerometer bias (δθ = 0, b_a = 0 given: the Xsens file rewritten, noise kept); "
+        "with all of that, the arm constraint off (camera + IMU + rest), and the rest update "
+        "off (drifting arm, no rest) (validation/mocap_budget.py `where`, `with_truth`).", "",
+        *WHERE_HEADER, *truths, ""]
+
+
+def section(rays: list[str], budget: list[str], rates: list | None = None,
+            truths: list[str] | None = None) -> list[str]:
     """The two tables and their reading, as lines of docs/validation-from-mocap.md."""
     if not rays:
         return []
@@ -173,6 +316,7 @@ def section(rays: list[str], budget: list[str], rates: list | None = None) -> li
         "",
         *BUDGET_HEADER, *budget, "",
         *([rates_line(rates), ""] if rates else []),
+        *(truth_section(truths) if truths else []),
         "**Reading.** *Detection* was the first limit: with the patch in view on every frame of "
         "AR1, FR1 and FR2, `detect` had reported 53, 21 and 30 of 108, 87 and 103 frames. As the "
         "hand came towards the camera its back turned face-on and the patch's area grew up to 15 % "
