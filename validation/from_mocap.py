@@ -61,12 +61,13 @@ def wrist_rmse(folder: Path, method: str = "pf-constraint", sets: tuple[str, ...
 REST = ("fuse.rest_velocity_sd_m_s=0.01",)  # v = 0 ± 1 cm/s where the hand rests (fuse/rest.py)
 
 
-def drift_sets(rates: tuple[float, ...], side: float = 1.0) -> tuple[str, ...]:
+def drift_sets(rates: tuple[float, ...], side: float = 1.0, offset: bool = True
+               ) -> tuple[str, ...]:
     """The drifting arm with the shoulder's and the upper arm's walk rates (m/√s), priors (m)
     and the prior's offset from the declared arm (x for a right arm; ``side`` −1 mirrors it
     for a left one) measured on the other trials (mocap_budget.walk_rates, arm_priors), not
-    the scored."""
-    walk_s, walk_l, sd_s, sd_l, dx, dy, dz, dl = rates
+    the scored. ``offset`` False: none (an "auto" arm is already the elbow's sphere)."""
+    walk_s, walk_l, sd_s, sd_l, dx, dy, dz, dl = rates[:4] + (rates[4:] if offset else (0.0,) * 4)
     return ("fuse.shoulder=drifting", f"fuse.shoulder_walk_m_s={walk_s:.4f}",
             f"fuse.upper_arm_walk_m_s={walk_l:.4f}", f"fuse.shoulder_sd_m={sd_s:.4f}",
             f"fuse.upper_arm_sd_m={sd_l:.4f}", f"fuse.shoulder_offset_x_m={side * dx:.4f}",
@@ -83,7 +84,8 @@ def smoother_row(name: str, what: str, folder: Path, rates: tuple[float, ...]
     drift = drift_sets(rates, mocap_budget.side_sign(folder.parent / f"{folder.name}.truth.npz"))
     runs = [(folder, (), "smoother-fixed"), (folder, drift, "smoother-drifting"),
             (folder, drift + REST, "smoother-drifting-rest"),
-            (auto_folder, (), "smoother-fixed"), (auto_folder, drift + REST, "smoother-drifting")]
+            (auto_folder, (), "smoother-fixed"),
+            (auto_folder, drift_sets(rates, offset=False) + REST, "smoother-drifting")]
     v, why = [], ""
     for f, sets, sub in runs:
         try:
@@ -251,8 +253,10 @@ def write(out: Path, mocap: list[str], synthetic: list[str], smoother: list[str]
         "The same sessions with the default `arm-smoother` (wrist 3-D RMSE, cm; issue 14's goal: "
         "≤ 1.5 cm with the drifting shoulder on every trial). *Drifting arm*: `--set "
         "fuse.shoulder=drifting` — the shoulder (3) and the upper arm's length (1) as random "
-        "walks from the declared arm, with a wide prior about it (docs/fusion.md), their rates "
-        "measured on the other six trials (below); *+ rest*: also `--set "
+        "walks from a prior centred on the declared arm moved by where the elbow's sphere lies "
+        "from it (`shoulder_offset_*_m`, `upper_arm_offset_m`) and as wide as the trials spread "
+        "about that (docs/fusion.md), offsets, spreads and rates measured on the other six "
+        "trials (below); *+ rest*: also `--set "
         "fuse.rest_velocity_sd_m_s=0.01`, zero velocity where the hand rests (IMU quiet and "
         "patch still, fuse/rest.py), the smoother started on the IMU recorded before the video. "
         "Scored: the drifting arm + rest with the declared arm (bold column).", "",
