@@ -137,7 +137,8 @@ def _pyav_frames(video: VideoStream) -> Iterator[tuple[int, object]]:
         return
     try:
         stream = container.streams.video[0]
-        stream.thread_type = "SLICE"  # frame threads cost CPU; detect decodes on its own thread
+        stream.thread_type = "AUTO"  # FFmpeg's frame threads: no more CPU a frame than one thread
+        #                              (benchmarks/decoders.py), at 2-4x the wall speed
         i = 0
         for frame in container.decode(stream):
             if i >= video.n_frames:
