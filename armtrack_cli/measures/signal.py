@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
-from scipy.signal import butter, sosfiltfilt
 
 from armtrack_cli.measures.base import NotComputable, Settings
+from armtrack_cli.measures.butter import lowpass_columns
 
 
 def longest_gap_s(t: np.ndarray, ok: np.ndarray) -> float:
@@ -39,7 +39,7 @@ def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
     near Nyquist or the record too short to pad."""
     if fc >= 0.45 * fs or len(x) <= 27:  # sosfiltfilt pads 3 × (2 × order + 1) samples
         return x
-    return sosfiltfilt(butter(4, fc, fs=fs, output="sos"), x, axis=0)
+    return lowpass_columns(x, fs, fc)  # scipy's sosfiltfilt(butter(4, …)), in numpy
 
 
 def speed_profile(t: np.ndarray, xyz: np.ndarray, s: Settings,
