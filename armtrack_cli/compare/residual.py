@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armtrack_cli.measures.butter import zero_phase
+from armtrack_cli.core.butter import zero_phase
 from armtrack_cli.measures.signal import lowpass
 
 MIN_HZ = 1.0  # the lowest cut-off tried: a marker at rest is not filtered below it

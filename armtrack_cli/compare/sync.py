@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.compare.errors import truth_at
+from armtrack_cli.core.bounded_min import bounded_min
 
 MIN_OVERLAP = 0.5  # share of the estimate's frames that must meet the shifted truth
 COARSE = 5  # the coarse pass tries every 5th offset of the grid (0.05 s at 100 Hz) …
@@ -86,8 +87,6 @@ def estimate_offset(t: np.ndarray, est: np.ndarray, truth_t: np.ndarray, truth_x
     truth's own clock, truth_xyz (m, 3) m in W; eye (3,) m in W, the camera's centre (None:
     the whole residual counts). None when no offset in centre_s ± search_s gives the overlap
     needed."""
-    from scipy.optimize import minimize_scalar
-
     n_est = int(np.isfinite(est).all(axis=1).sum())
     if n_est < 10:
         return None
@@ -101,10 +100,9 @@ def estimate_offset(t: np.ndarray, est: np.ndarray, truth_t: np.ndarray, truth_x
     if not np.isfinite(costs).any():
         return None
     d0 = grid[int(np.argmin(costs))]
-    res = minimize_scalar(_cost, bounds=(d0 - step, d0 + step), method="bounded",
-                          args=(t, est, truth_t, truth_xyz, rate_hz, n_est, rays),
-                          options={"xatol": 1e-5})
-    delta = float(res.x) if res.fun <= costs.min() else float(d0)
+    x, fun = bounded_min(lambda d: _cost(d, t, est, truth_t, truth_xyz, rate_hz, n_est, rays),
+                         d0 - step, d0 + step, xatol=1e-5)  # scipy's bounded minimize_scalar
+    delta = float(x) if fun <= costs.min() else float(d0)
     r, ok = _residual(delta, t, est, truth_t, truth_xyz, rate_hz)
     r = r - r.mean(axis=0)  # the SD from the whole residual: across the rays alone it is
     #                         pixel-small and the SD too sure (0.1 ms against 0.6 ms off)

@@ -17,7 +17,6 @@ from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
-from armtrack_cli.pipeline.palm import compare_palm
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.outputs import output_set, write_table
@@ -80,6 +79,8 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     session = load_session(path)
     require(session, "groundtruth")
     if session.palm is not None:  # Cordella et al.: pipeline/palm.py
+        from armtrack_cli.pipeline.palm import compare_palm  # its libraries only when needed
+
         return compare_palm(session, out_dir(session, out), methods)
     work = WorkFolder(out_dir(session, out))
     methods = tuple(methods) or work.trajectories(METHODS)

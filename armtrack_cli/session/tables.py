@@ -29,9 +29,14 @@ def numeric(path: Path, df: pd.DataFrame, cols, *, missing_ok: bool = True) -> n
     """Columns as float64; a text cell, or an empty one where none may be, names its row."""
     out = np.empty((len(df), len(cols)))
     for k, c in enumerate(cols):
-        v = pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)
-        text = np.isnan(v) & df[c].notna().to_numpy() & ~df[c].astype(str).str.strip().str.lower(
-        ).isin(["nan", ""]).to_numpy()
+        col = df[c]
+        if col.dtype.kind in "fiu":  # parsed as numbers whole: no text cell to look for
+            v = col.to_numpy(dtype=float)
+            text = np.zeros(len(v), bool)
+        else:
+            v = pd.to_numeric(col, errors="coerce").to_numpy(dtype=float)
+            text = np.isnan(v) & col.notna().to_numpy() & ~col.astype(str).str.strip().str.lower(
+            ).isin(["nan", ""]).to_numpy()
         if text.any():
             r = int(np.flatnonzero(text)[0])
             raise DataError(path, f"row {r + 1}: {c} = {df[c].iloc[r]!r} is not a number",

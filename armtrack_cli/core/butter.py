@@ -6,8 +6,9 @@ without importing scipy.signal (over a second of import), and cheap to repeat at
 cut-offs on one signal (Winter's residual analysis, compare/residual.py).
 
 Each pass is linear: the zero-state response, a convolution with the impulse response h
-(truncated where it has decayed below 1e-20 of its start: the filter is stable), done by FFT,
-plus the response to the initial state, C·A^n·s0, added over the same span. The FFT of the
+(truncated where it has decayed below 1e-20 of its start: the filter is stable), plus the
+response to the initial state, C·A^n·s0. Both passes together are one multiplication by
+|H|² in the frequency domain and corrections at the two ends (zero_phase); the FFT of the
 extended signal is taken once for every cut-off.
 """
 
@@ -106,7 +107,12 @@ def fast_len(n: int) -> int:
 def zero_phase(x: np.ndarray, fs: float, cutoffs: Iterable[float]) -> Iterator[np.ndarray]:
     """x (S, N) signals (N > PAD, finite); for each cut-off in turn (Hz, below fs/2), the
     signals low-passed forward and backward: (S, N), scipy.signal.sosfiltfilt's result.
-    Lazy: stop iterating and the remaining cut-offs cost nothing."""
+    Lazy: stop iterating and the remaining cut-offs cost nothing.
+
+    With c = h * ext (the forward pass without its initial state), the backward pass is
+    Σ_k h[k] y1[m + k] with y1 = c on [0, ne) plus the initial state's response z1: one
+    inverse FFT of ext's transform times |H|² gives it for the whole of c, and two short
+    direct sums (length of h) take off c's tail beyond ne and add z1's share."""
     x = np.atleast_2d(np.asarray(x, float))
     cutoffs = [float(f) for f in cutoffs]
     if not cutoffs:
@@ -119,13 +125,18 @@ def zero_phase(x: np.ndarray, fs: float, cutoffs: Iterable[float]) -> Iterator[n
     E = np.fft.rfft(ext, nfft)
     for fc in cutoffs:
         h, R, zi = _response(fc, fs, ne)
-        H = np.fft.rfft(h, nfft)
         L = len(h)
-        y = np.fft.irfft(E * H, nfft)[:, :ne]  # forward: h * ext …
-        y[:, :L] += (ext[:, :1] * zi) @ R.T  # … + the response to zi · ext[0]
-        s_end = y[:, -1:] * zi
-        y = np.fft.irfft(np.fft.rfft(y, nfft) * np.conj(H), nfft)[:, :ne]  # backward: Σ h[k] y[m+k]
-        y[:, ne - L:] += (s_end @ R.T)[:, ::-1]  # … + the response to zi · y[-1], reversed
+        H = np.fft.rfft(h, nfft)
+        y = np.fft.irfft(E * (H.real**2 + H.imag**2), nfft)[:, :ne]
+        g = h[::-1]
+        z1 = (ext[:, :1] * zi) @ R.T  # (S, L): the forward pass's initial-state response
+        for i in range(len(x)):
+            if L > 1:  # c beyond ne (it is cut from y1), from ext's last L − 1 samples
+                tail = np.convolve(h, ext[i, ne - L + 1:])[L - 1:2 * L - 2]
+                y[i, ne - L + 1:] -= np.convolve(g, tail)[:L - 1]
+            y[i, :L] += np.convolve(g, z1[i])[L - 1:2 * L - 1]
+        last = ext[:, ne - L:][:, ::-1] @ h + z1[:, -1] * (L == ne)  # y1[ne − 1]
+        y[:, ne - L:] += ((last[:, None] * zi) @ R.T)[:, ::-1]  # backward initial state
         yield y[:, PAD:ne - PAD]
 
 
