@@ -286,6 +286,44 @@ def end_to_end(tmp: str, minutes: float) -> list[tuple]:
     return rows
 
 
+def run_one_process(tmp: str, minutes: float) -> tuple:
+    """`armtrack run SESSION --through compare` as one process (each library imported once),
+    into a fresh work folder so that every stage runs: wall seconds, peak memory (MB), error,
+    load. After end_to_end(tmp, minutes), whose session folder it reuses."""
+    folder = Path(tmp) / f"long-{minutes:g}"
+    out = Path(tmp) / f"run-{minutes:g}"
+    return ("`armtrack run` (calibrate → compare in one process)", *stage(
+        f"pipeline.run({str(folder)!r}, through='compare', out={str(out)!r})"),
+        os.getloadavg()[0])
+
+
+def end_to_end_only() -> None:
+    """`python benchmarks/run.py --end-to-end`: the end-to-end sections alone (BENCH_MINUTES,
+    each stage in its own process and `armtrack run` as one, the growth and memory tables),
+    written over those of docs/benchmarks.md (the other sections kept)."""
+    import tempfile
+
+    from report import end_to_end_lines
+
+    minutes = [float(m) for m in os.environ.get("BENCH_MINUTES", "1,10,60").split(",")]
+    from armtrack_cli.core.methods import DEFAULT_FOR_KIND
+
+    res = {"default": DEFAULT_FOR_KIND["arm"], "e2e": {}, "run": {}}
+    with tempfile.TemporaryDirectory() as tmp:
+        for m in minutes:
+            res["e2e"][m] = end_to_end(tmp, m)
+            res["run"][m] = run_one_process(tmp, m)
+    res["floor"] = import_floor()
+    doc = REPO / "docs" / "benchmarks.md"
+    text, lines = doc.read_text(), end_to_end_lines(res)
+    start = text.find("\n## A ")
+    end = text.find("\n## Palm sessions")
+    start = len(text.rstrip("\n")) if start < 0 else start
+    end = len(text) if end < 0 else end
+    doc.write_text(text[:start] + "\n" + "\n".join(lines) + "\n" + text[end:])
+    print("\n".join(lines))
+
+
 def import_floor() -> list[tuple[str, float]]:
     """Peak resident memory (MB) of a fresh process that only imports: each library fuse
     needs alone, and each stage's module (what it holds before reading a byte)."""
@@ -322,7 +360,10 @@ def main() -> None:
         res["resampling"] = resampling_vs_filterpy()
         res["scaling"] = scaling_rows(inp, proj, arm, x0, P0, s)
         res["user"] = user_rows(folder, out)
-        res["e2e"] = {m: end_to_end(tmp, m) for m in minutes}
+        res["e2e"], res["run"] = {}, {}
+        for m in minutes:
+            res["e2e"][m] = end_to_end(tmp, m)
+            res["run"][m] = run_one_process(tmp, m)
         res["floor"] = import_floor()
     libs = ", ".join(f"{p} {version(p)}" for p in ("numpy", "scipy", "numba",
                                                    "opencv-python-headless", "filterpy"))
@@ -337,4 +378,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    detection_only() if "--detection" in sys.argv[1:] else main()
+    if "--detection" in sys.argv[1:]:
+        detection_only()
+    elif "--end-to-end" in sys.argv[1:]:
+        end_to_end_only()
+    else:
+        main()
