@@ -27,7 +27,12 @@ def detection_lines(res: dict) -> list[str]:
          "(all its threads), best of 3, what the stage costs whatever else the machine runs. "
          "`detect` decodes on a second thread while it detects, so on an idle machine it "
          "cannot beat the slower of *decode only (CPU)* and *detector alone (CPU)*, and on a "
-         f"busy one it needs their sum. Load average (1 min) {load[0]:.1f} when these rows "
+         "busy one it needs their sum. The patch's `detect` decodes with PyAV to I420 planes "
+         "and converts to BGR only its search window (the whole frame only to re-acquire); "
+         "× decode-only is against the faster of the two decoders (OpenCV's BGR, PyAV's "
+         "planes). What each part of the patch tracker costs: `python "
+         "benchmarks/patch_profile.py`. "
+         f"Load average (1 min) {load[0]:.1f} when these rows "
          f"began, {load[1]:.1f} when they ended. `python benchmarks/run.py --detection` reruns "
          "this section alone.", "",
          "| what | frames | seconds | frames/s | × decode-only time | goal | |",

@@ -33,7 +33,12 @@ from timing import best_of  # noqa: E402
 
 from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.session.config import load_session  # noqa: E402
-from armtrack_cli.session.video import iter_frames, iter_frames_ahead, probe_video  # noqa: E402
+from armtrack_cli.session.video import (  # noqa: E402
+    iter_frames,
+    iter_frames_ahead,
+    iter_frames_i420,
+    probe_video,
+)
 
 
 def wall(fn, runs: int = 3) -> float:
@@ -68,31 +73,56 @@ def detection_rows(tmp: str) -> list[tuple]:
         name = folder.name
         session = load_session(folder)
         video = probe_video(session.camera.video)
-        n = video.n_frames
+        n, i420 = video.n_frames, session.palm is None  # detect reads the patch's as I420
         dec = wall(lambda v=video: sum(1 for _ in iter_frames(v)), 3)
         dec_cpu = best_of(lambda v=video: sum(1 for _ in iter_frames(v)), 3)
-        dec2 = wall(lambda v=video: sum(1 for _ in iter_frames_ahead(v)), 3)
+        if i420:
+            yuv = wall(lambda v=video: sum(1 for _ in iter_frames_i420(v)), 3)
+            yuv_cpu = best_of(lambda v=video: sum(1 for _ in iter_frames_i420(v)), 3)
+        dec2 = wall(lambda v=video, y=i420: sum(1 for _ in iter_frames_ahead(v, i420=y)), 3)
         det = wall(lambda f=folder, n=name: pipeline.detect(f, out=os.path.join(tmp, n)), 3)
-        kind, alone = detector_alone(session, video)
-        rows.append((f"decode only, {name}", n, dec, dec, ""))
-        rows.append((f"decode only, {name} (CPU)", n, dec_cpu, dec, ""))
-        rows.append((f"decode on a second thread, {name}", n, dec2, dec, ""))
-        rows.append((f"detector alone on decoded frames: {kind}, {name} (CPU)", n, alone, dec,
+        kind, alone = detector_alone(session, video, i420)
+        ref = min(dec, yuv) if i420 else dec  # the faster decoder's time
+        rows.append((f"decode only, {name}", n, dec, ref, ""))
+        rows.append((f"decode only, {name} (CPU)", n, dec_cpu, ref, ""))
+        if i420:
+            rows.append((f"decode only, PyAV I420 planes (no conversion), {name}", n, yuv, ref,
+                         ""))
+            rows.append((f"decode only, PyAV I420 planes, {name} (CPU)", n, yuv_cpu, ref, ""))
+        rows.append((f"decode on a second thread{', I420' if i420 else ''}, {name}", n, dec2, ref,
                      ""))
-        rows.append((f"detect: {kind}, {name}", n, det, dec,
+        rows.append((f"detector alone on decoded frames: {kind}, {name} (CPU)", n, alone, ref,
+                     ""))
+        rows.append((f"detect: {kind}, {name}", n, det, ref,
                      "≥ 1,500 frames/s and ≤ 2.5× decode-only"))
         if name == "circle-01":
             rows.append((f"`armtrack detect {name} --json` (fresh process, its own frames/s)", n,
-                         n / _detect_cli(folder, Path(tmp) / "cli"), dec,
+                         n / _detect_cli(folder, Path(tmp) / "cli"), ref,
                          "≥ 1,500 frames/s and ≤ 2.5× decode-only"))
     return rows
 
 
-def detector_alone(session, video) -> tuple[str, float]:
-    """What is detected, and the detector's CPU seconds (best of 3) on the decoded frames."""
+def detector_alone(session, video, i420: bool = False) -> tuple[str, float]:
+    """What is detected, and the detector's CPU seconds (best of 3) on the decoded frames (as
+    detect gets them: with ``i420`` PyAV's planes, each run on fresh YuvFrames so that no
+    conversion is kept from an earlier run)."""
     from armtrack_cli.detect.palm_blobs import PalmBlobDetector
     from armtrack_cli.detect.patch_tracker import PatchTracker
+    from armtrack_cli.vision.yuv import YuvFrame
 
+    if i420:
+        planes = [img for _, _, img in iter_frames_i420(video)]
+        c = session.camera.patch
+
+        def run():
+            fresh = [YuvFrame(f.y, f.u, f.v) if isinstance(f, YuvFrame) else f for f in planes]
+            tracker = PatchTracker(c.low, c.high, fps=video.fps)
+            t0 = time.process_time()
+            for i, f in enumerate(fresh):
+                tracker.step(i, f)
+            return time.process_time() - t0
+
+        return "wrist patch (CamShift, I420)", min(run() for _ in range(3))
     frames = [img for _, _, img in iter_frames(video)]
     if session.palm is not None:
         c = session.palm.colour
