@@ -109,11 +109,12 @@ def _maybe_row(row, n, pre, out):
         h30 = np.float32(30) * hn  # 30 hn / d: the hue before OpenCV's rounding (within 0.66)
         hw = h30 + np.float32(180) * d  # the same wrapped, for hn < 0
         lo, hi, d255 = h_lo1 * d, h_hi1 * d, np.float32(255) * d
+        # below -1 the hue is certain to wrap (OpenCV adds 180 to it): only hw is tested
         if wrap:
-            in0 = (h30 >= lo) | (h30 <= hi)
+            in0 = ((h30 >= lo) | (h30 <= hi)) & (h30 >= -d)
             inw = ((hw >= lo) | (hw <= hi)) & (hn < 0)
         else:
-            in0 = (h30 >= lo) & (h30 <= hi)
+            in0 = (h30 >= lo) & (h30 <= hi) & (h30 >= -d)
             inw = (hw >= lo) & (hw <= hi) & (hn < 0)
         out[i] = ((v >= v_lo) & (v <= v_hi) & (d255 >= s_lo1 * v) & (d255 <= s_hi1 * v)
                   & (in0 | inw))

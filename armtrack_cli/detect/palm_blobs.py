@@ -89,6 +89,16 @@ class PalmBlobDetector:
     def _candidates_mask(self, hsv: np.ndarray) -> np.ndarray:
         return range_mask(hsv, *self._cand)
 
+    def warm(self) -> None:
+        """Set the compiled kernel up now (numba's import was done in __init__; this loads the
+        kernel's code from its cache) rather than at the first frame searched with it."""
+        if self._kernel is not None:
+            k, (cand, pre, core), w = self._kernel, self._ranges, self._kernel.Work(2, 2)
+            k.window_of(np.zeros((1, 4)), 1, 2, 2)
+            k.search_box(np.zeros((2, 2, 3), np.uint8), 0, 0, 2, 2, cand, pre, core,
+                         np.ones(HS_BINS[0] * HS_BINS[1]), 1.0, 1.0, 0.0, True, False, k.SDIV,
+                         k.HDIV, w.label, w.px, w.py, w.parent, w.bin, w.core, w.maybe)
+
     def detect(self, bgr: np.ndarray) -> np.ndarray:
         """(k, 4) candidate blobs: u, v (sub-pixel centroid), area (px), score in [0, 1]."""
         out = None
