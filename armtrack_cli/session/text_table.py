@@ -10,7 +10,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.limits import MAX_TEXT_BYTES
@@ -153,6 +152,8 @@ def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | N
         line_no.append(i)
     if not rows:
         raise error(path, "has a column header but no data rows (truncated?)")
+    import pandas as pd  # the slow path only: plain numeric tables never get here
+
     frame = pd.DataFrame(rows, columns=range(n))
     data = np.empty((len(rows), n))
     for c in range(n):
