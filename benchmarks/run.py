@@ -95,7 +95,7 @@ def detection_rows(tmp: str) -> list[tuple]:
                      ""))
         rows.append((f"detect: {kind}, {name}", n, det, ref,
                      "≥ 1,500 frames/s and ≤ 2.5× decode-only"))
-        if name == "circle-01":
+        if name in ("circle-01", "wrist-rom-01"):
             rows.append((f"`armtrack detect {name} --json` (fresh process, its own frames/s)", n,
                          n / _detect_cli(folder, Path(tmp) / "cli"), ref,
                          "≥ 1,500 frames/s and ≤ 2.5× decode-only"))

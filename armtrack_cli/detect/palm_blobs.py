@@ -64,7 +64,11 @@ def hand_roi(bgr: np.ndarray, margin: float) -> tuple[int, int, int, int] | None
 
 
 class PalmBlobDetector:
-    def __init__(self, low, high, settings: PalmBlobSettings = PalmBlobSettings()):
+    """compiled: boxes searched by detect/palm_blob_kernel.py (numba); False: by OpenCV
+    (_search_reference, the reference the kernel is tested against)."""
+
+    def __init__(self, low, high, settings: PalmBlobSettings = PalmBlobSettings(), *,
+                 compiled: bool = True):
         assert settings.centroid in CENTROIDS, settings.centroid
         self.low, self.high, self.s = tuple(low), tuple(high), settings
         self.reference: np.ndarray | None = None
@@ -73,9 +77,27 @@ class PalmBlobDetector:
         self.full_searches = 0  # frames searched over the hand's whole region
         lo = (max(0, self.low[0] - settings.hue_slack), settings.sat_floor, self.low[2] // 2)
         self._cand = (lo, (min(180, self.high[0] + settings.hue_slack), 255, 255))
+        self._kernel = None
+        if compiled:  # numba's: imported only when a detector is made
+            from armtrack_cli.detect import palm_blob_kernel
+            self._kernel = palm_blob_kernel
+            cand = np.array([*self._cand[0], *self._cand[1]], np.int64)
+            self._ranges = (cand, palm_blob_kernel.prefilter_bounds(cand),
+                            np.array([*self.low, *self.high], np.int64))
+            self._work = None
 
     def _candidates_mask(self, hsv: np.ndarray) -> np.ndarray:
         return range_mask(hsv, *self._cand)
+
+    def warm(self) -> None:
+        """Set the compiled kernel up now (numba's import was done in __init__; this loads the
+        kernel's code from its cache) rather than at the first frame searched with it."""
+        if self._kernel is not None:
+            k, (cand, pre, core), w = self._kernel, self._ranges, self._kernel.Work(2, 2)
+            k.window_of(np.zeros((1, 4)), 1, 2, 2)
+            k.search_box(np.zeros((2, 2, 3), np.uint8), 0, 0, 2, 2, cand, pre, core,
+                         np.ones(HS_BINS[0] * HS_BINS[1]), 1.0, 1.0, 0.0, True, False, k.SDIV,
+                         k.HDIV, w.label, w.px, w.py, w.parent, w.bin, w.core, w.maybe)
 
     def detect(self, bgr: np.ndarray) -> np.ndarray:
         """(k, 4) candidate blobs: u, v (sub-pixel centroid), area (px), score in [0, 1]."""
@@ -94,6 +116,8 @@ class PalmBlobDetector:
         return out
 
     def _window_of(self, blobs: np.ndarray, shape) -> tuple[int, int, int, int]:
+        if self._kernel is not None:
+            return self._kernel.window_of(blobs, self.s.window_margin_px, shape[1], shape[0])
         m = self.s.window_margin_px
         x0, y0 = np.floor(blobs[:, :2].min(axis=0)).astype(int) - m
         x1, y1 = np.ceil(blobs[:, :2].max(axis=0)).astype(int) + m + 1
@@ -107,6 +131,22 @@ class PalmBlobDetector:
         return self._search(bgr, (roi[0] & ~1, roi[1] & ~1, roi[2], roi[3]), edge_fails=False)
 
     def _search(self, bgr: np.ndarray, box, *, edge_fails: bool) -> np.ndarray | None:
+        """Candidates in box (x0, y0, x1, y1), x0 and y0 even; None if edge_fails and a
+        candidate touches an edge of the box that is not the image's."""
+        if self._kernel is None or self.reference is None:
+            return self._search_reference(bgr, box, edge_fails=edge_fails)
+        k, (H, W) = self._kernel, bgr.shape[:2]
+        if self._work is None or self._work.shape != (H, W):
+            self._work = k.Work(H, W)
+        w, (cand, pre, core) = self._work, self._ranges
+        out, ok = k.search_box(
+            bgr, *box, cand, pre, core, self.reference, self._ref_sum,
+            float(self.s.min_area_px), float(self.s.min_score), edge_fails,
+            self.s.centroid == "core", k.SDIV, k.HDIV, w.label, w.px, w.py, w.parent, w.bin,
+            w.core, w.maybe)
+        return out if ok else None
+
+    def _search_reference(self, bgr: np.ndarray, box, *, edge_fails: bool) -> np.ndarray | None:
         """Candidates in box (x0, y0, x1, y1), x0 and y0 even (OpenCV labels 2 × 2 blocks: on
         the same grid as the whole image, so the same order); None if edge_fails and a
         candidate touches an edge of the box that is not the image's."""
@@ -117,6 +157,7 @@ class PalmBlobDetector:
             if cv2.countNonZero(ref_mask) < self.s.min_area_px:
                 return np.zeros((0, 4))
             self.reference = hs_histogram(hsv, ref_mask).astype(np.float64).ravel()
+            self._ref_sum = float(self.reference.sum())
         mask = self._candidates_mask(hsv)
         bx, by, bw, bh = cv2.boundingRect(mask)  # of the candidate pixels
         if bw == 0:
