@@ -258,3 +258,8 @@ def test_a_drifting_arm_lets_go_of_a_wrongly_declared_shoulder(mocap_session, tm
     assert drifting < 1.0, (drifting, fixed)  # … which the drifting arm gives back (0.6 cm)
     off = np.linalg.norm(np.array(meta["shoulder_mean_m"]) - true_sh)
     assert off < 0.025, meta["shoulder_mean_m"]  # 6 cm off declared, under 2.5 cm estimated
+    # told where the sphere lies from the declared arm (shoulder_offset_*), its prior starts there
+    told, meta = _wrist_rmse_cm(wrong, "fuse.shoulder=drifting", "fuse.rest_velocity_sd_m_s=0.01",
+                                "fuse.shoulder_offset_y_m=-0.06")
+    assert np.linalg.norm(np.array(meta["shoulder_mean_m"]) - true_sh) < 0.5 * off, meta
+    assert told < 1.0, told

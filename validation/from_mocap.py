@@ -26,6 +26,7 @@ sys.path.insert(0, str(REPO))
 from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.core.errors import ArmtrackError  # noqa: E402
 from armtrack_cli.session.arm_file import read_arm_estimate  # noqa: E402
+from armtrack_cli.session.tables import read_trajectory  # noqa: E402
 from armtrack_cli.simulate.arm_session import ArmSimSettings  # noqa: E402
 from armtrack_cli.simulate.from_mocap import MocapSimSettings  # noqa: E402
 
@@ -60,12 +61,18 @@ def wrist_rmse(folder: Path, method: str = "pf-constraint", sets: tuple[str, ...
 REST = ("fuse.rest_velocity_sd_m_s=0.01",)  # v = 0 ± 1 cm/s where the hand rests (fuse/rest.py)
 
 
-def drift_sets(rates: tuple[float, ...]) -> tuple[str, ...]:
-    """The drifting arm with the shoulder's and the upper arm's walk rates (m/√s) and priors
-    (m) measured on the other trials (mocap_budget.walk_rates, arm_priors), not the scored."""
-    return ("fuse.shoulder=drifting", f"fuse.shoulder_walk_m_s={rates[0]:.4f}",
-            f"fuse.upper_arm_walk_m_s={rates[1]:.4f}", f"fuse.shoulder_sd_m={rates[2]:.4f}",
-            f"fuse.upper_arm_sd_m={rates[3]:.4f}")
+def drift_sets(rates: tuple[float, ...], side: float = 1.0, offset: bool = True
+               ) -> tuple[str, ...]:
+    """The drifting arm with the shoulder's and the upper arm's walk rates (m/√s), priors (m)
+    and the prior's offset from the declared arm (x for a right arm; ``side`` −1 mirrors it
+    for a left one) measured on the other trials (mocap_budget.walk_rates, arm_priors), not
+    the scored. ``offset`` False: none (an "auto" arm is already the elbow's sphere)."""
+    walk_s, walk_l, sd_s, sd_l, dx, dy, dz, dl = rates[:4] + (rates[4:] if offset else (0.0,) * 4)
+    return ("fuse.shoulder=drifting", f"fuse.shoulder_walk_m_s={walk_s:.4f}",
+            f"fuse.upper_arm_walk_m_s={walk_l:.4f}", f"fuse.shoulder_sd_m={sd_s:.4f}",
+            f"fuse.upper_arm_sd_m={sd_l:.4f}", f"fuse.shoulder_offset_x_m={side * dx:.4f}",
+            f"fuse.shoulder_offset_y_m={dy:.4f}", f"fuse.shoulder_offset_z_m={dz:.4f}",
+            f"fuse.upper_arm_offset_m={dl:.4f}")
 
 
 def smoother_row(name: str, what: str, folder: Path, rates: tuple[float, ...]
@@ -74,10 +81,11 @@ def smoother_row(name: str, what: str, folder: Path, rates: tuple[float, ...]
     the drifting arm with the rest update (scored: goal ≤ 1.5 cm), with the declared arm, and
     fixed / drifting with rest with the "auto" arm (wrist 3-D RMSE, cm)."""
     auto_folder = folder.parent / f"{folder.name}-auto"
-    drift = drift_sets(rates)
+    drift = drift_sets(rates, mocap_budget.side_sign(folder.parent / f"{folder.name}.truth.npz"))
     runs = [(folder, (), "smoother-fixed"), (folder, drift, "smoother-drifting"),
             (folder, drift + REST, "smoother-drifting-rest"),
-            (auto_folder, (), "smoother-fixed"), (auto_folder, drift + REST, "smoother-drifting")]
+            (auto_folder, (), "smoother-fixed"),
+            (auto_folder, drift_sets(rates, offset=False) + REST, "smoother-drifting")]
     v, why = [], ""
     for f, sets, sub in runs:
         try:
@@ -104,6 +112,35 @@ def budget_rows(name: str, folder: Path, smoothed: list[float]) -> tuple[str, st
               ((NO_ARM, "smoother-no-arm"), (NO_ARM + REST, "smoother-no-arm-rest"))]
     return (mocap_budget.ray_row(name, mocap_budget.detection(folder, truth), geo),
             mocap_budget.budget_row(name, geo, *smoothed[:3], *no_arm))
+
+
+def _where(out: Path, truth: Path, ok: np.ndarray) -> dict:
+    est = read_trajectory(out / "trajectory-arm-smoother.csv")[["wrist_x", "wrist_y", "wrist_z"]]
+    return mocap_budget.where(est.to_numpy(), truth, ok)
+
+
+# parts of the scored run's input replaced by the truth, one more at a time (mocap_budget.with_truth)
+TRUTH_RUNS = ((dict(camera=True), ()), (dict(camera=True, detections=True), ()),
+              (dict(camera=True, detections=True, imu=True), ()),
+              (dict(camera=True, detections=True, imu=True), NO_ARM),
+              (dict(camera=True, detections=True, imu=True), "no rest"))
+
+
+def truth_row(name: str, folder: Path, rates: tuple[float, ...], tmp: Path) -> str:
+    """Where the scored run's error is (mocap_budget.where) and what it becomes as the
+    simulator's truth replaces its inputs: the camera's pose, the detections, the IMU's
+    orientation error and bias (validation of issue 14: an error budget)."""
+    truth, scored = folder.parent / f"{folder.name}.truth.npz", folder / "smoother-drifting-rest"
+    det = np.genfromtxt(scored / "detections.csv", delimiter=",", names=True)
+    w = _where(scored, truth, det["ok"] == 1)
+    cells = []
+    for k, (parts, extra) in enumerate(TRUTH_RUNS):
+        session, work = mocap_budget.with_truth(folder, scored, tmp / f"{name}-truth{k}", **parts)
+        sets = drift_sets(rates, mocap_budget.side_sign(truth)) + (
+            () if extra == "no rest" else REST + tuple(extra))
+        pipeline.fuse(session, method="arm-smoother", sets=sets, out=work)
+        cells.append(_where(work, truth, det["ok"] == 1)["rmse"])
+    return mocap_budget.where_row(name, w, cells)
 
 
 SMOOTHER = ["| session | motion | fixed shoulder, declared arm | drifting arm, declared arm "
@@ -156,7 +193,7 @@ def main() -> None:
     args = ap.parse_args()
     t0 = time.perf_counter()
     mocap, synthetic, smoother, rays, budget = [], [], [], [], []
-    rates_used = []
+    rates_used, truths = [], []
     with tempfile.TemporaryDirectory() as tmp:
         if UE_ADL.is_dir():
             for trial in TASKS:
@@ -176,7 +213,8 @@ def main() -> None:
                 ray, cost = budget_rows(trial, folder, smoothed)
                 rays.append(ray)
                 budget.append(cost)
-                print(mocap[-1], smoother[-1], ray, cost, sep="\n", file=sys.stderr)
+                truths.append(truth_row(trial, folder, rates, Path(tmp) / "truth"))
+                print(mocap[-1], smoother[-1], ray, cost, truths[-1], sep="\n", file=sys.stderr)
         for task in ("circle", "rectangle", "reach", "figure8"):
             for seed in range(args.seeds):
                 folder = Path(tmp) / f"{task}-s{seed}"
@@ -191,11 +229,12 @@ def main() -> None:
         print(synthetic[-1], file=sys.stderr)
         shutil.rmtree(tmp, ignore_errors=True)
     write(Path(args.out), mocap, synthetic, smoother, time.perf_counter() - t0, args.seeds,
-          (rays, budget, rates_used))
+          (rays, budget, rates_used, truths))
 
 
 def write(out: Path, mocap: list[str], synthetic: list[str], smoother: list[str], wall: float,
-          seeds: int, tables: tuple[list[str], list[str], list] = ([], [], [])) -> None:
+          seeds: int, tables: tuple[list[str], list[str], list, list[str]] = ([], [], [], [])
+          ) -> None:
     lines = [
         "# Sessions from real motion, and the arm model from the data", "",
         f"Generated by `python validation/from_mocap.py` (part of `make validate`) in {wall:.0f} s.",
@@ -214,8 +253,10 @@ def write(out: Path, mocap: list[str], synthetic: list[str], smoother: list[str]
         "The same sessions with the default `arm-smoother` (wrist 3-D RMSE, cm; issue 14's goal: "
         "≤ 1.5 cm with the drifting shoulder on every trial). *Drifting arm*: `--set "
         "fuse.shoulder=drifting` — the shoulder (3) and the upper arm's length (1) as random "
-        "walks from the declared arm, with a wide prior about it (docs/fusion.md), their rates "
-        "measured on the other six trials (below); *+ rest*: also `--set "
+        "walks from a prior centred on the declared arm moved by where the elbow's sphere lies "
+        "from it (`shoulder_offset_*_m`, `upper_arm_offset_m`) and as wide as the trials spread "
+        "about that (docs/fusion.md), offsets, spreads and rates measured on the other six "
+        "trials (below); *+ rest*: also `--set "
         "fuse.rest_velocity_sd_m_s=0.01`, zero velocity where the hand rests (IMU quiet and "
         "patch still, fuse/rest.py), the smoother started on the IMU recorded before the video. "
         "Scored: the drifting arm + rest with the declared arm (bold column).", "",

@@ -84,10 +84,13 @@ def drift_noise(dt: np.ndarray, s: FuseSettings) -> np.ndarray:
 
 
 def drift_prior(shoulder: np.ndarray, s: FuseSettings) -> tuple[np.ndarray, np.ndarray]:
-    """(ℓ, S) at the first frame: the declared arm (ℓ = 0, S = the declared shoulder), as
-    uncertain as a lab's declaration (upper_arm_sd_m, shoulder_sd_m per axis)."""
+    """(ℓ, S) at the first frame: the declared arm moved by the offset of the sphere the elbow
+    turns about from it (ℓ = upper_arm_offset_m, S = the declared shoulder + shoulder_offset_*;
+    0 by default: the declared arm), as uncertain as that sphere about it (upper_arm_sd_m,
+    shoulder_sd_m per axis)."""
     sd = np.array([s.upper_arm_sd_m] + [s.shoulder_sd_m] * 3)
-    return np.r_[0.0, shoulder], np.diag(sd**2)
+    off = np.array([s.shoulder_offset_x_m, s.shoulder_offset_y_m, s.shoulder_offset_z_m])
+    return np.r_[s.upper_arm_offset_m, shoulder + off], np.diag(sd**2)
 
 
 def orientation_var(s: FuseSettings) -> np.ndarray:

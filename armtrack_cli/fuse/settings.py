@@ -79,6 +79,10 @@ class FuseSettings:
     shoulder_walk_m_s: float = 0.011  # … and its random walk, m/√s per axis
     upper_arm_sd_m: float = 0.06  # how far the declared upper-arm length may be off …
     upper_arm_walk_m_s: float = 0.023  # … and its random walk, m/√s
+    shoulder_offset_x_m: float = 0.0  # the drifting arm's prior mean: the centre the elbow turns
+    shoulder_offset_y_m: float = 0.0  # about lies this far from the declared shoulder (W, m) …
+    shoulder_offset_z_m: float = 0.0  # (docs/validation-from-mocap.md measures it; 0: declared)
+    upper_arm_offset_m: float = 0.0  # … and its radius this far from the declared upper arm
     rest_velocity_sd_m_s: float = 0.0  # > 0: where the hand rests (fuse/rest.py) its velocity is
     #                                    zero within this SD (m/s, per axis); 0: off
     pre_roll_s: float = 1.0  # with the rest update: the arm smoother starts this long before the
