@@ -31,7 +31,7 @@ gives no IMU velocity. Measured in docs/validation-sync.md.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
@@ -110,10 +110,14 @@ class _Prepared:
     window: int
 
 
-def _prepare(p: SyncProblem, delta: float) -> _Prepared:
+def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Prepared:
+    """The fit's parts at δ; given ``like`` (another δ's), only the Jacobians (the rays'
+    depths move with δ), the rest shared with it: one copy of the per-sample arrays."""
+    J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
+    if like is not None:
+        return replace(like, J=J)
     dt = float(np.median(np.diff(p.t_frames)))
     window = max(5, int(round(WINDOW_S / dt)) | 1)
-    J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
     drift = _spline_basis(p.t_frames)
     v_imu = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (p.a_W[1:] + p.a_W[:-1])
                                                    * np.diff(p.t_imu)[:, None], axis=0)])
@@ -327,7 +331,7 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
     # (only it and the latest: each holds per-sample arrays)
     best = last = _refine(p, pre, n_img, delta, step) + (pre,)
     for _ in range(REPREPARE):  # the rays' depths with the IMU's orientation at the latest δ
-        pre = _prepare(p, last[0])
+        pre = _prepare(p, last[0], like=pre)
         now = _refine(p, pre, n_img, last[0], step) + (pre,)
         best = now if now[1] < best[1] else best  # the first of equals, as min() took it
         done, last = abs(now[0] - last[0]) < 1e-3, now
