@@ -17,7 +17,8 @@ spline loose enough to absorb it absorbs too (a circle's timing was lost to 25 m
 gyro, the leak is one constant, and a stiff spline keeps the motion's timing.
 J_k is taken where the detection's ray meets the
 arm's sphere (eq. 15, the IMU's orientation at t_k − δ). Cost: the fit's mean squared
-residual over the frames both cover. A grid at one frame period over the search window finds
+residual over the frames both cover. A grid at one frame period over the search window (scored
+every COARSE periods, then at every period about the best of those) finds
 the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
 SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
 (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
@@ -55,6 +56,7 @@ GAP_S = 0.1  # an IMU gap longer than this is missing, not interpolated across
 BRIDGE_S = 0.1  # detections lost for at most this long are bridged for the derivative
 MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be scored
 MIN_FRAMES = 30
+COARSE = 3  # the grid is scored every COARSE frame periods, then finely about the best
 REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
 GRAZE_M = 0.15  # m: intersections closer than this along the ray are a grazing ray's (with 0.5 px
 #                of noise a grazing ray's two part by 10 cm from one frame to the next)
@@ -320,9 +322,7 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
         return None
     step = pre.dt
     grid = centre_s + np.arange(-search_s, search_s + step / 2, step)
-    cache: dict = {}
-    costs = np.array([cost(d, p, pre, n_img, cache) for d in grid])
-    del cache  # the grid's normal equations: the refinements keep their own
+    costs = _grid_costs(grid, p, pre, n_img)
     if not np.isfinite(costs).any():
         return None
     delta = float(grid[int(np.argmin(costs))])
@@ -341,6 +341,22 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
     last = now = None  # noqa: F841 (their arrays freed before the SD)
     sd, frames = _sd(p, pre, delta)
     return ImuOffset(delta, sd, frames)
+
+
+def _grid_costs(grid: np.ndarray, p: SyncProblem, pre: _Prepared, n_img: int) -> np.ndarray:
+    """The cost at every COARSE-th δ of the grid, then at each δ within COARSE − 1 of the
+    best of those (coarse to fine: the basin is many frames wide); inf where not evaluated."""
+    costs = np.full(grid.size, np.inf)
+    cache: dict = {}  # the grid's normal equations: the refinements keep their own
+    coarse = np.unique(np.r_[np.arange(0, grid.size, COARSE), grid.size - 1])
+    for i in coarse:
+        costs[i] = cost(grid[i], p, pre, n_img, cache)
+    if np.isfinite(costs).any():
+        best = int(np.argmin(costs))
+        for i in range(max(best - COARSE + 1, 0), min(best + COARSE, grid.size)):
+            if i not in coarse:
+                costs[i] = cost(grid[i], p, pre, n_img, cache)
+    return costs
 
 
 def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
