@@ -35,7 +35,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline
 
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
@@ -115,6 +114,8 @@ class _Prepared:
 def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Prepared:
     """The fit's parts at δ; given ``like`` (another δ's), only the Jacobians (the rays'
     depths move with δ), the rest shared with it: one copy of the per-sample arrays."""
+    from scipy.interpolate import CubicHermiteSpline  # imported where used (issue 15)
+
     J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
     if like is not None:
         return replace(like, J=J)

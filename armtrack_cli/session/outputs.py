@@ -15,9 +15,10 @@ import re
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import pandas as pd
+if TYPE_CHECKING:  # annotations only: a stage that writes no table need not load pandas
+    import pandas as pd
 
 from armtrack_cli import __version__
 from armtrack_cli.core.errors import OutputError
