@@ -163,3 +163,18 @@ def test_rest_rows_inserted_per_block_equal_the_plain_pass(monkeypatch):
     got = arm_smoother.run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm)
     assert got.x.shape[0] == tf.size
     assert np.abs(got.x[:, :3] - ref[:, :3]).max() < 1e-9
+
+
+def test_orientation_track_in_chunks_equals_one_chunk(monkeypatch):
+    """∫R dt and the gyro's orientation track summed a few IMU intervals at a time (the sum
+    carried across chunks) equal one sum over the whole recording, bit for bit."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0, 5, 0.01) + 0.003
+    q = quat.normalize(np.array([1.0, 0.2, 0, 0]) + 0.1 * rng.standard_normal((t.size, 4)))
+    w = rng.standard_normal((t.size, 3))
+    tf = np.arange(0.1, 4.9, 1 / 30)
+    whole = imu_fold.orientation_track(t, q, w, tf), imu_fold.rotation_integral(t, q)
+    monkeypatch.setattr(imu_fold, "FOLD_CHUNK", 7)
+    parts = imu_fold.orientation_track(t, q, w, tf), imu_fold.rotation_integral(t, q)
+    assert np.array_equal(parts[0].dtheta, whole[0].dtheta)
+    assert np.array_equal(parts[0].G, whole[0].G) and np.array_equal(parts[1], whole[1])
