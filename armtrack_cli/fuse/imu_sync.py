@@ -380,15 +380,11 @@ def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
     over the scale and the drift): SD² = 2 σ² / S'', σ² = S / (2n − parameters), inflated by
     (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ; and the frames used."""
     h = 0.5 * pre.dt
-    r0, n_par, ok = _fit(p, pre, delta)
-    _, ok_pm = _mask(p, pre, delta + h)
-    ok = ok & ok_pm & _mask(p, pre, delta - h)[1]
-    rss = []
-    for d in (delta - h, delta, delta + h):
-        r, n_par, _ = _fit(p, pre, d, ok)
-        rss.append(float(np.sum(r**2)))
+    ok = _mask(p, pre, delta)[1] & _mask(p, pre, delta + h)[1] & _mask(p, pre, delta - h)[1]
+    fits = [_fit(p, pre, d, ok)[:2] for d in (delta - h, delta, delta + h)]  # three fits
+    rss = [float(np.sum(r**2)) for r, _ in fits]
     curv = (rss[0] - 2 * rss[1] + rss[2]) / h**2
-    r, _, _ = _fit(p, pre, delta, ok)
+    r, n_par = fits[1]
     sigma2 = rss[1] / max(r.size - n_par, 1)
     rho = float(np.mean([np.corrcoef(r[:-1, k], r[1:, k])[0, 1] for k in range(2)]))
     rho = min(max(rho, 0.0), 0.99)
