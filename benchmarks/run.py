@@ -33,7 +33,12 @@ from timing import best_of  # noqa: E402
 
 from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.session.config import load_session  # noqa: E402
-from armtrack_cli.session.video import iter_frames, iter_frames_ahead, probe_video  # noqa: E402
+from armtrack_cli.session.video import (  # noqa: E402
+    iter_frames,
+    iter_frames_ahead,
+    iter_frames_i420,
+    probe_video,
+)
 
 
 def wall(fn, runs: int = 3) -> float:
@@ -68,31 +73,56 @@ def detection_rows(tmp: str) -> list[tuple]:
         name = folder.name
         session = load_session(folder)
         video = probe_video(session.camera.video)
-        n = video.n_frames
+        n, i420 = video.n_frames, session.palm is None  # detect reads the patch's as I420
         dec = wall(lambda v=video: sum(1 for _ in iter_frames(v)), 3)
         dec_cpu = best_of(lambda v=video: sum(1 for _ in iter_frames(v)), 3)
-        dec2 = wall(lambda v=video: sum(1 for _ in iter_frames_ahead(v)), 3)
+        if i420:
+            yuv = wall(lambda v=video: sum(1 for _ in iter_frames_i420(v)), 3)
+            yuv_cpu = best_of(lambda v=video: sum(1 for _ in iter_frames_i420(v)), 3)
+        dec2 = wall(lambda v=video, y=i420: sum(1 for _ in iter_frames_ahead(v, i420=y)), 3)
         det = wall(lambda f=folder, n=name: pipeline.detect(f, out=os.path.join(tmp, n)), 3)
-        kind, alone = detector_alone(session, video)
-        rows.append((f"decode only, {name}", n, dec, dec, ""))
-        rows.append((f"decode only, {name} (CPU)", n, dec_cpu, dec, ""))
-        rows.append((f"decode on a second thread, {name}", n, dec2, dec, ""))
-        rows.append((f"detector alone on decoded frames: {kind}, {name} (CPU)", n, alone, dec,
+        kind, alone = detector_alone(session, video, i420)
+        ref = min(dec, yuv) if i420 else dec  # the faster decoder's time
+        rows.append((f"decode only, {name}", n, dec, ref, ""))
+        rows.append((f"decode only, {name} (CPU)", n, dec_cpu, ref, ""))
+        if i420:
+            rows.append((f"decode only, PyAV I420 planes (no conversion), {name}", n, yuv, ref,
+                         ""))
+            rows.append((f"decode only, PyAV I420 planes, {name} (CPU)", n, yuv_cpu, ref, ""))
+        rows.append((f"decode on a second thread{', I420' if i420 else ''}, {name}", n, dec2, ref,
                      ""))
-        rows.append((f"detect: {kind}, {name}", n, det, dec,
+        rows.append((f"detector alone on decoded frames: {kind}, {name} (CPU)", n, alone, ref,
+                     ""))
+        rows.append((f"detect: {kind}, {name}", n, det, ref,
                      "≥ 1,500 frames/s and ≤ 2.5× decode-only"))
         if name == "circle-01":
             rows.append((f"`armtrack detect {name} --json` (fresh process, its own frames/s)", n,
-                         n / _detect_cli(folder, Path(tmp) / "cli"), dec,
+                         n / _detect_cli(folder, Path(tmp) / "cli"), ref,
                          "≥ 1,500 frames/s and ≤ 2.5× decode-only"))
     return rows
 
 
-def detector_alone(session, video) -> tuple[str, float]:
-    """What is detected, and the detector's CPU seconds (best of 3) on the decoded frames."""
+def detector_alone(session, video, i420: bool = False) -> tuple[str, float]:
+    """What is detected, and the detector's CPU seconds (best of 3) on the decoded frames (as
+    detect gets them: with ``i420`` PyAV's planes, each run on fresh YuvFrames so that no
+    conversion is kept from an earlier run)."""
     from armtrack_cli.detect.palm_blobs import PalmBlobDetector
     from armtrack_cli.detect.patch_tracker import PatchTracker
+    from armtrack_cli.vision.yuv import YuvFrame
 
+    if i420:
+        planes = [img for _, _, img in iter_frames_i420(video)]
+        c = session.camera.patch
+
+        def run():
+            fresh = [YuvFrame(f.y, f.u, f.v) if isinstance(f, YuvFrame) else f for f in planes]
+            tracker = PatchTracker(c.low, c.high, fps=video.fps)
+            t0 = time.process_time()
+            for i, f in enumerate(fresh):
+                tracker.step(i, f)
+            return time.process_time() - t0
+
+        return "wrist patch (CamShift, I420)", min(run() for _ in range(3))
     frames = [img for _, _, img in iter_frames(video)]
     if session.palm is not None:
         c = session.palm.colour
@@ -256,6 +286,44 @@ def end_to_end(tmp: str, minutes: float) -> list[tuple]:
     return rows
 
 
+def run_one_process(tmp: str, minutes: float) -> tuple:
+    """`armtrack run SESSION --through compare` as one process (each library imported once),
+    into a fresh work folder so that every stage runs: wall seconds, peak memory (MB), error,
+    load. After end_to_end(tmp, minutes), whose session folder it reuses."""
+    folder = Path(tmp) / f"long-{minutes:g}"
+    out = Path(tmp) / f"run-{minutes:g}"
+    return ("`armtrack run` (calibrate → compare in one process)", *stage(
+        f"pipeline.run({str(folder)!r}, through='compare', out={str(out)!r})"),
+        os.getloadavg()[0])
+
+
+def end_to_end_only() -> None:
+    """`python benchmarks/run.py --end-to-end`: the end-to-end sections alone (BENCH_MINUTES,
+    each stage in its own process and `armtrack run` as one, the growth and memory tables),
+    written over those of docs/benchmarks.md (the other sections kept)."""
+    import tempfile
+
+    from report import end_to_end_lines
+
+    minutes = [float(m) for m in os.environ.get("BENCH_MINUTES", "1,10,60").split(",")]
+    from armtrack_cli.core.methods import DEFAULT_FOR_KIND
+
+    res = {"default": DEFAULT_FOR_KIND["arm"], "e2e": {}, "run": {}}
+    with tempfile.TemporaryDirectory() as tmp:
+        for m in minutes:
+            res["e2e"][m] = end_to_end(tmp, m)
+            res["run"][m] = run_one_process(tmp, m)
+    res["floor"] = import_floor()
+    doc = REPO / "docs" / "benchmarks.md"
+    text, lines = doc.read_text(), end_to_end_lines(res)
+    start = text.find("\n## A ")
+    end = text.find("\n## Palm sessions")
+    start = len(text.rstrip("\n")) if start < 0 else start
+    end = len(text) if end < 0 else end
+    doc.write_text(text[:start] + "\n" + "\n".join(lines) + "\n" + text[end:])
+    print("\n".join(lines))
+
+
 def import_floor() -> list[tuple[str, float]]:
     """Peak resident memory (MB) of a fresh process that only imports: each library fuse
     needs alone, and each stage's module (what it holds before reading a byte)."""
@@ -292,7 +360,10 @@ def main() -> None:
         res["resampling"] = resampling_vs_filterpy()
         res["scaling"] = scaling_rows(inp, proj, arm, x0, P0, s)
         res["user"] = user_rows(folder, out)
-        res["e2e"] = {m: end_to_end(tmp, m) for m in minutes}
+        res["e2e"], res["run"] = {}, {}
+        for m in minutes:
+            res["e2e"][m] = end_to_end(tmp, m)
+            res["run"][m] = run_one_process(tmp, m)
         res["floor"] = import_floor()
     libs = ", ".join(f"{p} {version(p)}" for p in ("numpy", "scipy", "numba",
                                                    "opencv-python-headless", "filterpy"))
@@ -307,4 +378,9 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    detection_only() if "--detection" in sys.argv[1:] else main()
+    if "--detection" in sys.argv[1:]:
+        detection_only()
+    elif "--end-to-end" in sys.argv[1:]:
+        end_to_end_only()
+    else:
+        main()

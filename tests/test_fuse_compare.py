@@ -247,3 +247,19 @@ def test_fuse_and_compare_errors(sessions, tmp_path):
     assert r.exit_code == 1 and "does not overlap trajectory-" in r.stderr
     assert "check [sync] groundtruth_offset_s" in r.stderr
     assert (shifted / "armtrack" / "errors.csv").exists() == before
+
+
+def test_compare_imports_no_pandas_scipy_opencv_matplotlib_or_numba(sessions, tmp_path):
+    """compare in a fresh process (a shell script's `armtrack compare`) loads none of them:
+    its filters, interpolation, peaks and offset search are numpy (tests/test_scipy_ports.py),
+    its tables numpy and csv (tests/test_plain_tables.py)."""
+    import subprocess
+    import sys
+
+    folder, _ = sessions["circle"]
+    code = ("import sys; from armtrack_cli import pipeline; "
+            f"pipeline.compare({str(folder)!r}, out={str(folder / 'armtrack')!r}); "
+            "print(' '.join(m for m in ('pandas', 'scipy', 'cv2', 'matplotlib', 'numba') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""

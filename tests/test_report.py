@@ -164,7 +164,8 @@ def test_palm_wrist_angle_ranges_against_qualisys_and_the_palm_pages(tmp_path):
     ok = np.isfinite(truth.wrist_angles).all(axis=1)
     d = np.abs(truth.wrist_angles[ok] - exact["frame_angles_deg"][ok])
     assert d.max() < 2.0 and d.mean() < 0.5
-    rows = pd.DataFrame(measure_comparison("ukf-palm", kin.astype({"value": str}), truth))
+    rows = pd.DataFrame(measure_comparison("ukf-palm", kin.astype({"value": str}).to_dict("records"),
+                                           truth))
     rows = rows[rows["segment"] == "session"].set_index("measure")
     for a in ("flexion", "deviation", "pronation"):
         assert abs(rows.loc[f"wrist_{a}_rom", "error"]) <= 2.0, rows.loc[f"wrist_{a}_rom"]

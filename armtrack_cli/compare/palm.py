@@ -6,13 +6,16 @@ F is that hand frame averaged over the first second of the estimate (the neutral
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from armtrack_cli.compare.errors import COLUMNS, error_rows, table_one, truth_at
 from armtrack_cli.core.wrist import ANGLES, hand_frame, wrist_angles_deg
 from armtrack_cli.core.wrist_measures import angular_speeds, lowpass
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 NEUTRAL_S = 1.0
 
@@ -111,6 +114,8 @@ def _angle_rows(method: str, t: np.ndarray, est: np.ndarray, truth: np.ndarray) 
 
 
 def score(method: str, traj: pd.DataFrame, truth: TruthPose) -> PalmScore:
+    import pandas as pd  # palm sessions only: arm compare never loads it
+
     t = traj["t"].to_numpy()
     est_w = traj[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
     est_a = traj[[f"{a}_deg" for a in ANGLES]].to_numpy()

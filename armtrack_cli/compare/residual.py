@@ -13,29 +13,45 @@ lets through would otherwise raise a maximum such as the peak speed by 2–3 % o
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
+
+from armtrack_cli.core.butter import zero_phase
+from armtrack_cli.measures.signal import lowpass
 
 MIN_HZ = 1.0  # the lowest cut-off tried: a marker at rest is not filtered below it
 
 
 def residuals(x: np.ndarray, fs: float, cutoffs: np.ndarray) -> np.ndarray:
     """(len(cutoffs),) R(fc) of one coordinate x (N,): 4th-order zero-lag Butterworth."""
-    return np.array([np.sqrt(np.mean((x - sosfiltfilt(butter(4, fc, fs=fs, output="sos"), x)) ** 2))
-                     for fc in cutoffs])
+    return np.array([_rms(x, y[0]) for y in zero_phase(x[None], fs, cutoffs)])
+
+
+def _rms(x: np.ndarray, y: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((x - y) ** 2)))
 
 
 def winter_cutoff(x: np.ndarray, fs: float, *, max_hz: float) -> float:
     """The cut-off (Hz, MIN_HZ … max_hz) where R(fc) falls to the noise level a, the intercept of
     the straight line fitted to R over the noise band (0.3–0.45 × fs/2; Winter 2009 §3.4.4.3).
     x: (N,) one coordinate, evenly sampled at fs; max_hz when too short to tell (< 2 s)."""
+    return winter_lowpass(x, fs, max_hz=max_hz)[0]
+
+
+def winter_lowpass(x: np.ndarray, fs: float, *, max_hz: float) -> tuple[float, np.ndarray]:
+    """(winter_cutoff's cut-off, x low-passed at it (N,)): the cut-offs of the grid are tried
+    in rising order and the first at the noise level ends the search, its filtered copy the
+    result (the transform of x is taken once for all of them: measures.butter)."""
     nyq = fs / 2.0
     if x.size < 2 * fs or max_hz <= MIN_HZ or 0.3 * nyq <= max_hz:
-        return max_hz
+        return max_hz, lowpass(x[:, None], fs, max_hz)[:, 0]
     noise_band = np.linspace(0.3 * nyq, 0.45 * nyq, 8)
-    slope, a = np.polyfit(noise_band, residuals(x, fs, noise_band), 1)
-    if not np.isfinite(a) or a <= 0:
-        return max_hz
     grid = np.arange(MIN_HZ, max_hz + 1e-9, 0.25)
-    r = residuals(x, fs, grid)
-    below = np.flatnonzero(r <= a)
-    return float(grid[below[0]]) if below.size else max_hz
+    runs = zero_phase(x[None], fs, [*noise_band, *grid, max_hz])
+    r_noise = [_rms(x, next(runs)[0]) for _ in noise_band]
+    slope, a = np.polyfit(noise_band, r_noise, 1)
+    if not np.isfinite(a) or a <= 0:
+        return max_hz, lowpass(x[:, None], fs, max_hz)[:, 0]
+    for fc in grid:
+        y = next(runs)[0]
+        if _rms(x, y) <= a:
+            return float(fc), y
+    return max_hz, lowpass(x[:, None], fs, max_hz)[:, 0]

@@ -10,8 +10,8 @@ differences within each run of valid samples.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
 
+from armtrack_cli.core.butter import zero_phase
 from armtrack_cli.core.wrist import ANGLES
 
 CUTOFF_HZ = 6.0
@@ -24,11 +24,10 @@ def lowpass(t: np.ndarray, x: np.ndarray) -> np.ndarray:
     out = x.copy()
     if CUTOFF_HZ >= 0.45 * fs:
         return out
-    sos = butter(4, CUTOFF_HZ, fs=fs, output="sos")
     edges = np.flatnonzero(np.diff(np.r_[0, np.isfinite(x).astype(int), 0]))
     for a, b in zip(edges[::2], edges[1::2]):
         if b - a > 27:  # sosfiltfilt's padding needs 3 × (2 × order + 1) samples
-            out[a:b] = sosfiltfilt(sos, x[a:b])
+            out[a:b] = next(zero_phase(x[None, a:b], fs, [CUTOFF_HZ]))[0]  # = scipy's sosfiltfilt
     return out
 
 

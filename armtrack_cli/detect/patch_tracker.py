@@ -30,6 +30,7 @@ import numpy as np
 from armtrack_cli.detect.colour import hue_histogram, range_mask
 from armtrack_cli.detect.patch_check import HISTORY, Reference, look
 from armtrack_cli.detect.regions import Regions
+from armtrack_cli.vision.yuv import whole_bgr, window_bgr
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
 RELINK_FRAMES = 3  # a tracklet is taken only once its next frames can vouch for its first
@@ -177,17 +178,19 @@ class PatchTracker:
         self._hsv = self._bp = None  # whole-frame buffers of the acquiring pass, reused
 
     # --- per frame
-    def step(self, frame_index: int, bgr: np.ndarray) -> None:
+    def step(self, frame_index: int, frame) -> None:
+        """Frame ``frame_index``, a BGR image or a vision.yuv.YuvFrame (only the search region
+        is converted to BGR while tracking, the whole frame while acquiring)."""
         if frame_index >= self.out.shape[0]:
             grown = np.full((2 * max(frame_index, self.out.shape[0]), 6), np.nan)
             grown[:self.out.shape[0]] = self.out
             self.out = grown
         self.out[frame_index, 5] = 0
         self.n_frames = max(self.n_frames, frame_index + 1)
-        if self.window is not None and self._track(frame_index, bgr):
+        if self.window is not None and self._track(frame_index, frame):
             return
         self.window = None
-        self._acquire(frame_index, bgr)
+        self._acquire(frame_index, whole_bgr(frame))
 
     def _search_region(self, shape) -> tuple[int, int, int, int]:
         x, y, w, h = self.window
@@ -197,10 +200,10 @@ class PatchTracker:
         return (max(0, x + dx - m), max(0, y + dy - m), min(W, x + dx + w + m),
                 min(H, y + dy + h + m))
 
-    def _track(self, i: int, bgr: np.ndarray) -> bool:
+    def _track(self, i: int, frame) -> bool:
         """CamShift in the search region around the last window; True if the patch is there."""
-        x0, y0, x1, y1 = self._search_region(bgr.shape)
-        hsv = cv2.cvtColor(bgr[y0:y1, x0:x1], cv2.COLOR_BGR2HSV)
+        x0, y0, x1, y1 = self._search_region(frame.shape)
+        hsv = cv2.cvtColor(window_bgr(frame, x0, y0, x1, y1), cv2.COLOR_BGR2HSV)
         mask = cv2.morphologyEx(range_mask(hsv, self.low, self.high), cv2.MORPH_OPEN, _OPEN)
         x, y, w, h = self.window
         sx, sy = x + int(round(self.vel[0])) - x0, y + int(round(self.vel[1])) - y0

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
-from scipy.signal import butter, sosfiltfilt
 
+from armtrack_cli.core.butter import lowpass_columns
 from armtrack_cli.measures.base import NotComputable, Settings
+from armtrack_cli.measures.pchip import pchip
 
 
 def longest_gap_s(t: np.ndarray, ok: np.ndarray) -> float:
@@ -30,7 +30,7 @@ def uniform(t: np.ndarray, x: np.ndarray, s: Settings, what: str) -> tuple[np.nd
     dt = float(np.median(np.diff(tt)))
     n = int(np.floor((tt[-1] - tt[0]) / dt + 1e-6)) + 1
     t_u = tt[0] + dt * np.arange(n)
-    return t_u, PchipInterpolator(tt, xx, axis=0)(t_u)
+    return t_u, pchip(tt, xx, t_u)  # scipy's PchipInterpolator, in numpy
 
 
 def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
@@ -39,7 +39,7 @@ def lowpass(x: np.ndarray, fs: float, fc: float) -> np.ndarray:
     near Nyquist or the record too short to pad."""
     if fc >= 0.45 * fs or len(x) <= 27:  # sosfiltfilt pads 3 × (2 × order + 1) samples
         return x
-    return sosfiltfilt(butter(4, fc, fs=fs, output="sos"), x, axis=0)
+    return lowpass_columns(x, fs, fc)  # scipy's sosfiltfilt(butter(4, …)), in numpy
 
 
 def speed_profile(t: np.ndarray, xyz: np.ndarray, s: Settings,

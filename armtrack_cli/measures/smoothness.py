@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from armtrack_cli.measures.base import DEFAULT, NotComputable, Settings
+from armtrack_cli.measures.peaks import find_peaks
 
 
 def _check(v: np.ndarray, fs: float) -> np.ndarray:
@@ -62,5 +62,5 @@ def movement_units(t: np.ndarray, v: np.ndarray, s: Settings = DEFAULT) -> tuple
     so a ripple on a rising flank, which the speed soon exceeds, is not a unit."""
     v = _check(v, 1.0)
     dist = max(1, int(np.ceil(s.mu_min_gap_s / np.median(np.diff(t)) - 1e-9)))
-    peaks, _ = find_peaks(v, prominence=s.mu_rise, distance=dist)
+    peaks = find_peaks(v, prominence=s.mu_rise, distance=dist)  # scipy's rules: measures/peaks.py
     return int(peaks.size), peaks

@@ -16,7 +16,6 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
 from armtrack_cli.measures.base import Settings
 
@@ -27,6 +26,8 @@ def smooth_draws(t: np.ndarray, sd: np.ndarray, s: Settings) -> Iterator[np.ndar
     noise smoothed by a Gaussian kernel of SD τc/2 (in frames at the median frame interval;
     circular, so every frame has unit variance) and rescaled by 1/√(Σ kernel²). Draw i is the
     i-th (N, d) block of one seeded stream of standard normals."""
+    from scipy.ndimage import gaussian_filter1d  # here: compare's truth has no SD to draw from
+
     rng = np.random.default_rng(s.seed)
     sd = np.nan_to_num(np.asarray(sd, float), nan=0.0)
     n, d = sd.shape

@@ -6,8 +6,6 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
 from armtrack_cli.compare.errors import COLUMNS, table_one
 from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_markers
 from armtrack_cli.compare.sync import estimate_offset
@@ -16,12 +14,16 @@ from armtrack_cli.core.methods import METHODS
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
-from armtrack_cli.pipeline.kinematics import measure_comparison, trajectory_inputs, truth_inputs
-from armtrack_cli.pipeline.palm import compare_palm
+from armtrack_cli.pipeline.kinematics import (
+    columns,
+    measure_comparison,
+    trajectory_inputs,
+    truth_inputs,
+)
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
-from armtrack_cli.session.outputs import output_set, write_table
-from armtrack_cli.session.tables import read_kinematics, read_trajectory
+from armtrack_cli.session.outputs import output_set, write_rows
+from armtrack_cli.session.plain_tables import kinematics_rows, trajectory_columns
 from armtrack_cli.session.workfolder import WorkFolder
 
 AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
@@ -42,11 +44,10 @@ def synchronised_truth(session: Session, trajs: dict, *, eye=None) -> tuple[Trut
     ref = next((m for m in SYNC_PREFERENCE if m in trajs), next(iter(trajs)))
     traj = trajs[ref]
     joint = "wrist" if "wrist" in raw.xyz else next(iter(raw.xyz))
-    est = traj[[f"{joint}_x", f"{joint}_y", f"{joint}_z"]].to_numpy() if f"{joint}_x" in traj \
-        else None
+    est = columns(traj, [f"{joint}_x", f"{joint}_y", f"{joint}_z"])
     centre = session.offset_s("groundtruth_offset_s") if declared else 0.0
     off = None if est is None else estimate_offset(
-        traj["t"].to_numpy(), est, raw.t, raw.xyz[joint], raw.rate_hz,
+        traj["t"], est, raw.t, raw.xyz[joint], raw.rate_hz,
         search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S, centre_s=centre, eye=eye)
     if not declared:
         if off is None:
@@ -80,36 +81,38 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     session = load_session(path)
     require(session, "groundtruth")
     if session.palm is not None:  # Cordella et al.: pipeline/palm.py
+        from armtrack_cli.pipeline.palm import compare_palm  # its libraries only when needed
+
         return compare_palm(session, out_dir(session, out), methods)
     work = WorkFolder(out_dir(session, out))
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    trajs = {m: read_trajectory(work / f"trajectory-{m}.csv") for m in methods}
+    trajs = {m: trajectory_columns(work / f"trajectory-{m}.csv") for m in methods}
     truth, offset = synchronised_truth(session, trajs, eye=_camera_centre(work.path))
     rows, mrows, excluded = [], [], {}
     for_measures = denoised(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
     for m, traj in trajs.items():
-        t = traj["t"].to_numpy()
+        t = traj["t"]
         if truth.t[0] > t[-1] or truth.t[-1] < t[0]:
             raise DataError(session.groundtruth.file, f"does not overlap trajectory-{m}.csv in "
                             f"time (Qualisys {truth.t[0]:.2f}…{truth.t[-1]:.2f} s, trajectory "
                             f"{t[0]:.2f}…{t[-1]:.2f} s on the session clock)",
                             "check [sync] groundtruth_offset_s")
-        est = {j: traj[[f"{j}_x", f"{j}_y", f"{j}_z"]].to_numpy() for j in JOINTS
+        est = {j: columns(traj, [f"{j}_x", f"{j}_y", f"{j}_z"]) for j in JOINTS
                if f"{j}_x" in traj}
         s = score(m, t, est, truth)
         rows += s.rows
-        mrows += measure_comparison(m, read_kinematics(work / f"kinematics-{m}.csv"),
+        mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"),
                                     truth_inputs(trajectory_inputs(traj, session), session,
                                                  truth_markers(t, for_measures)))
         excluded.update(s.excluded)
     with output_set():
-        write_table(work / "errors.csv", pd.DataFrame(rows, columns=list(COLUMNS)),
-                    command="compare", settings={"methods": list(methods), "excluded_frames": excluded,
-                                                 "groundtruth_offset_s": offset})
-        write_table(work / "measures.csv", pd.DataFrame(mrows), command="compare",
-                    settings={"methods": list(methods)})
+        write_rows(work / "errors.csv", rows, columns=COLUMNS, command="compare",
+                   settings={"methods": list(methods), "excluded_frames": excluded,
+                             "groundtruth_offset_s": offset})
+        write_rows(work / "measures.csv", mrows, command="compare",
+                   settings={"methods": list(methods)})
     text = table_one(rows, "wrist") + ("\n\n" + table_one(rows, "elbow")
                                        if any(r["joint"] == "elbow" for r in rows) else "")
     return {"errors": str(work / "errors.csv"), "measures": str(work / "measures.csv"),

@@ -50,7 +50,7 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
         settings = section(doc, "detect.patch", PatchSettings, where)
         tracker = PatchTracker(session.camera.patch.low, session.camera.patch.high, settings,
                                fps=video.fps)
-        for i, _, img in iter_frames_ahead(video):
+        for i, _, img in iter_frames_ahead(video, i420=True):
             tracker.step(i, img)
             if on_frame:
                 on_frame(i + 1)

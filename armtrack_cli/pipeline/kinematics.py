@@ -4,34 +4,44 @@ and lays out the tables."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 
 from armtrack_cli.measures import CATALOGUE, Inputs, measure_rows
 from armtrack_cli.measures.angles import hand_frames, wrist_angles_deg
 from armtrack_cli.session.config import Session
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 XYZ = ("x", "y", "z")
 WRIST_ANGLES = ("flexion_deg", "deviation_deg", "pronation_deg")
 
 
-def _cols(traj: pd.DataFrame, names) -> np.ndarray | None:
-    return traj[list(names)].to_numpy(dtype=float) if all(c in traj for c in names) else None
+def columns(traj, names) -> np.ndarray | None:
+    """(N, len(names)) float columns of a trajectory table (a DataFrame, or column -> array as
+    session/plain_tables.py reads it), or None when one is missing."""
+    if not all(c in traj for c in names):
+        return None
+    return np.column_stack([np.asarray(traj[c], dtype=float) for c in names])
 
 
-def trajectory_inputs(traj: pd.DataFrame, session: Session, *,
+
+
+def trajectory_inputs(traj: pd.DataFrame | dict, session: Session, *,
                       q_WB: np.ndarray | None = None) -> Inputs:
     """A trajectory-METHOD.csv table (+ the IMU orientation at its frames, when fuse has it)."""
     arm, imu = session.arm, session.imu
-    ang_sd = _cols(traj, [f"{a}_sd" for a in WRIST_ANGLES])
+    ang_sd = columns(traj, [f"{a}_sd" for a in WRIST_ANGLES])
     return Inputs(
-        t=traj["t"].to_numpy(dtype=float), wrist=_cols(traj, [f"wrist_{a}" for a in XYZ]),
+        t=np.asarray(traj["t"], dtype=float), wrist=columns(traj, [f"wrist_{a}" for a in XYZ]),
         task=session.meta.task or "", side=session.meta.side,
-        elbow=_cols(traj, [f"elbow_{a}" for a in XYZ]),
+        elbow=columns(traj, [f"elbow_{a}" for a in XYZ]),
         shoulder=None if arm is None else np.asarray(arm.shoulder_m, float),
         q_WB=q_WB, forearm_axis=None if imu is None else imu.forearm_unit,
-        wrist_angles=_cols(traj, WRIST_ANGLES),
-        wrist_sd=_cols(traj, [f"wrist_{a}_sd" for a in XYZ]), angles_sd=ang_sd)
+        wrist_angles=columns(traj, WRIST_ANGLES),
+        wrist_sd=columns(traj, [f"wrist_{a}_sd" for a in XYZ]), angles_sd=ang_sd)
 
 
 def _cell(v) -> str:
@@ -42,6 +52,8 @@ def kinematics_table(traj: pd.DataFrame, session: Session, *,
                      q_WB: np.ndarray | None = None) -> pd.DataFrame:
     """kinematics-METHOD.csv: measure, segment, value (a number or "not computable: why"),
     sd (posterior uncertainty), unit (with the angle's convention)."""
+    import pandas as pd  # fuse's table; compare reads and writes its own without pandas
+
     rows = measure_rows(trajectory_inputs(traj, session, q_WB=q_WB))
     return pd.DataFrame([{**r, "value": _cell(r["value"])} for r in rows],
                         columns=["measure", "segment", "value", "sd", "unit", "t_start", "t_end"])
@@ -81,19 +93,35 @@ def _number(v) -> float:
         return float("nan")
 
 
-def measure_comparison(method: str, est: pd.DataFrame, truth: Inputs | None) -> list[dict]:
-    """measures.csv rows: each estimated measure (from kinematics-METHOD.csv) with the same
-    measure of the ground truth, the error (estimate − truth) and the error in % of truth."""
-    win = est[est["segment"] != "session"].groupby("segment", sort=False)[["t_start", "t_end"]].first()
-    windows = [tuple(w) for w in win.to_numpy()] if len(win) else None  # the estimate's segments
+def _windows(est: list[dict]) -> list[tuple] | None:
+    """The estimate's segments (t_start, t_end), in order of first appearance, each the first
+    value present among its rows (what pandas' groupby(sort=False).first() gives)."""
+    win: dict[str, list] = {}
+    for r in est:
+        if r["segment"] == "session":
+            continue
+        w = win.setdefault(r["segment"], [np.nan, np.nan])
+        for k, c in enumerate(("t_start", "t_end")):
+            v = r.get(c, np.nan)
+            if np.isnan(w[k]) and not np.isnan(v):
+                w[k] = v
+    return [tuple(np.float64(v) for v in w) for w in win.values()] or None
+
+
+def measure_comparison(method: str, est: list[dict], truth: Inputs | None) -> list[dict]:
+    """measures.csv rows: each estimated measure (kinematics-METHOD.csv's rows, as
+    session/plain_tables.kinematics_rows reads them) with the same measure of the ground
+    truth, the error (estimate − truth) and the error in % of truth."""
+    windows = _windows(est)  # the estimate's segments
     t_rows = ({(r["measure"], r["segment"]): r["value"] for r in measure_rows(truth, windows=windows)}
               if truth else {})
     out = []
-    for r in est.itertuples(index=False):
-        tv = t_rows.get((r.measure, r.segment), "not computable: the reference does not give this measure")
-        e, t = _number(r.value), _number(tv)
-        out.append({"method": method, "measure": r.measure, "segment": r.segment,
-                    "unit": CATALOGUE.get(r.measure, r.unit), "estimate": r.value,
-                    "estimate_sd": r.sd, "truth": _cell(tv), "error": e - t,
+    for r in est:
+        tv = t_rows.get((r["measure"], r["segment"]),
+                        "not computable: the reference does not give this measure")
+        e, t = _number(r["value"]), _number(tv)
+        out.append({"method": method, "measure": r["measure"], "segment": r["segment"],
+                    "unit": CATALOGUE.get(r["measure"], r["unit"]), "estimate": r["value"],
+                    "estimate_sd": r["sd"], "truth": _cell(tv), "error": e - t,
                     "error_pct": 100 * (e - t) / abs(t) if t else float("nan")})
     return out

@@ -35,9 +35,10 @@ from armtrack_cli.session.depth import depth_path, read_depth_frame
 from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.palm_io import read_palm_blobs, read_palm_toml
+from armtrack_cli.session.plain_tables import kinematics_rows
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.recipe import section
-from armtrack_cli.session.tables import read_kinematics, read_trajectory
+from armtrack_cli.session.tables import read_trajectory
 from armtrack_cli.session.video import probe_video
 
 METHOD = "ukf-palm"
@@ -188,7 +189,7 @@ def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict
         truth, markers = _marker_truth(session, t, start_t)
         tin = truth_inputs(est, session, markers)
     res = cmp.score(METHOD, traj, truth)
-    mrows = measure_comparison(METHOD, read_kinematics(dest / f"kinematics-{METHOD}.csv"), tin)
+    mrows = measure_comparison(METHOD, kinematics_rows(dest / f"kinematics-{METHOD}.csv"), tin)
     speeds = {r["measure"] for r in res.speed_rows}
     mrows = [r for r in mrows if r["measure"] not in speeds] + res.speed_rows
     with output_set():

@@ -19,7 +19,6 @@ from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.compare import compare
 from armtrack_cli.pipeline.detect import detect
 from armtrack_cli.pipeline.fuse import fuse, settings_for
-from armtrack_cli.pipeline.report import report
 from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.depth import depth_path
 from armtrack_cli.session.recipe import recipe_file, section
@@ -73,9 +72,15 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
                           lambda: compare(session.root, methods=methods, out=work.path)))
     made = tuple(work / n for st in steps[2:] for n in st.outputs)  # fuse's and compare's
     steps.append(Step("report", (toml, *made), ("report.pdf",),
-                      lambda: report([(session.root, work.path)])))
+                      lambda: _report([(session.root, work.path)])))
     return [s if not (s.settings and rec) else Step(s.name, (*s.inputs, rec), s.outputs, s.call,
                                                     s.settings) for s in steps]
+
+
+def _report(pairs) -> dict[str, Any]:
+    from armtrack_cli.pipeline.report import report  # matplotlib: only when a report is made
+
+    return report(pairs)
 
 
 def check_settings(recipe: str | None, sets: tuple[str, ...]) -> None:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from armtrack_cli.core.errors import VideoError
@@ -96,6 +95,8 @@ def _check_pose(path: Path, R, T) -> None:
 
 
 def write_camera_yaml(path: str | Path, cam: CameraModel) -> Path:
+    import cv2  # only to write: reading is opencv_yaml's (compare reads it without OpenCV)
+
     def write(tmp: Path) -> None:
         fs = cv2.FileStorage(str(tmp), cv2.FILE_STORAGE_WRITE | cv2.FILE_STORAGE_FORMAT_YAML)
         fs.write("camera_matrix", np.asarray(cam.K, dtype=float))

@@ -17,11 +17,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-if TYPE_CHECKING:  # annotations only: a stage that writes no table need not load pandas
-    import pandas as pd
-
 from armtrack_cli import __version__
 from armtrack_cli.core.errors import OutputError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 _STAGED: contextvars.ContextVar[list | None] = contextvars.ContextVar("staged", default=None)
 
@@ -114,6 +114,51 @@ def write_table(path: str | Path, table: pd.DataFrame, *, command: str,
     write_json(Path(path).with_suffix(".meta.json"),
                {"armtrack_version": __version__, "command": command, "settings": settings or {}})
     return out
+
+
+def write_rows(path: str | Path, rows: list[dict[str, Any]], *, command: str,
+               settings: dict[str, Any] | None = None, float_format: str = "%.6f",
+               columns: tuple[str, ...] | list[str] | None = None) -> Path:
+    """write_table(pd.DataFrame(rows, columns=columns)) without pandas, byte for byte: each
+    column typed as the DataFrame would type it (text, integers, or floats written with
+    float_format, NaN as an empty cell), cells quoted by the csv module as pandas quotes
+    them. A table it cannot type so (a column mixing text and numbers, a missing key, no
+    rows) goes to write_table itself."""
+    import csv
+    import io
+    import math
+
+    names = list(columns) if columns is not None else list(rows[0]) if rows else []
+    cols = [[r.get(n) for r in rows] for n in names] if all(set(r) == set(names)
+                                                          for r in rows) else None
+    kinds = [_kind(c) for c in cols] if cols and rows else None
+    if kinds is None or None in kinds:
+        import pandas as pd
+
+        return write_table(path, pd.DataFrame(rows, columns=columns), command=command,
+                           settings=settings, float_format=float_format)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(names)
+    fmt = [(lambda v: "" if math.isnan(v) else float_format % v) if k == "f" else str
+           for k in kinds]
+    for i in range(len(rows)):
+        w.writerow([f(c[i]) for f, c in zip(fmt, cols)])
+    out = write_text(path, buf.getvalue())
+    write_json(Path(path).with_suffix(".meta.json"),
+               {"armtrack_version": __version__, "command": command, "settings": settings or {}})
+    return out
+
+
+def _kind(cells: list) -> str | None:
+    """"s" text, "i" integers, "f" numbers with a float among them; None otherwise."""
+    import numbers
+
+    if all(isinstance(c, str) for c in cells):
+        return "s"
+    if any(isinstance(c, bool) or not isinstance(c, numbers.Real) for c in cells):
+        return None
+    return "i" if all(isinstance(c, numbers.Integral) for c in cells) else "f"
 
 
 def _all_float(table: pd.DataFrame) -> bool:

@@ -3,16 +3,21 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.limits import MAX_PIXEL_MARGIN, MAX_TEXT_BYTES
 from armtrack_cli.session.files import regular_file
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 
 def read_csv_table(path: Path, required: tuple[str, ...], hint: str) -> pd.DataFrame:
+    import pandas as pd  # here: compare reads its tables without it (session/plain_tables.py)
+
     regular_file(path, DataError, "a CSV table", hint=hint, max_bytes=MAX_TEXT_BYTES)
     try:
         df = pd.read_csv(path)
@@ -29,9 +34,16 @@ def numeric(path: Path, df: pd.DataFrame, cols, *, missing_ok: bool = True) -> n
     """Columns as float64; a text cell, or an empty one where none may be, names its row."""
     out = np.empty((len(df), len(cols)))
     for k, c in enumerate(cols):
-        v = pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)
-        text = np.isnan(v) & df[c].notna().to_numpy() & ~df[c].astype(str).str.strip().str.lower(
-        ).isin(["nan", ""]).to_numpy()
+        col = df[c]
+        if col.dtype.kind in "fiu":  # parsed as numbers whole: no text cell to look for
+            v = col.to_numpy(dtype=float)
+            text = np.zeros(len(v), bool)
+        else:
+            import pandas as pd
+
+            v = pd.to_numeric(col, errors="coerce").to_numpy(dtype=float)
+            text = np.isnan(v) & col.notna().to_numpy() & ~col.astype(str).str.strip().str.lower(
+            ).isin(["nan", ""]).to_numpy()
         if text.any():
             r = int(np.flatnonzero(text)[0])
             raise DataError(path, f"row {r + 1}: {c} = {df[c].iloc[r]!r} is not a number",
@@ -110,6 +122,8 @@ def read_trajectory(path: Path) -> pd.DataFrame:
         r, k = np.argwhere(far)[0]
         raise DataError(path, f"row {r + 1}: {df.columns[pos[k]]} = {values[r, pos[k]]:g} m, "
                         f"beyond {MAX_POSITION_M:g} m of the board", "rerun `armtrack fuse`")
+    import pandas as pd
+
     return pd.DataFrame(values, columns=df.columns)
 
 
@@ -121,6 +135,8 @@ def read_kinematics(path: Path) -> pd.DataFrame:
                         "kinematics file has no segment and sd columns: rerun fuse)")
     df = df.astype({"measure": str, "segment": str, "unit": str})
     df["value"] = df["value"].astype(str)
+    import pandas as pd
+
     text = ~df["value"].str.startswith("not computable") & pd.to_numeric(
         df["value"], errors="coerce").isna()
     if text.any():

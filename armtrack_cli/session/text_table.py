@@ -163,7 +163,7 @@ def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | N
         line_no.append(i)
     if not rows:
         raise error(path, "has a column header but no data rows (truncated?)")
-    import pandas as pd  # the row-by-row parse only: the plain export needs none
+    import pandas as pd  # the slow path only: plain numeric tables never get here
 
     frame = pd.DataFrame(rows, columns=range(n))
     data = np.empty((len(rows), n))

@@ -86,23 +86,80 @@ def probe_video(path: str | Path, *, topic: str | None = None) -> VideoStream:
     return VideoStream(str(path), "file", n, fps, w, h, t, source)
 
 
-def iter_frames(video: VideoStream) -> Iterator[tuple[int, float, np.ndarray]]:
-    """(index, session time, BGR uint8 image) for every frame, streamed."""
+def iter_frames(video: VideoStream, decode_from: int = 0
+                ) -> Iterator[tuple[int, float, np.ndarray]]:
+    """(index, session time, BGR uint8 image) for every frame (from ``decode_from`` on, the
+    earlier ones decoded and skipped), streamed."""
     if video.source == "mcap":
-        yield from _iter_mcap(video)
+        yield from ((i, t, img) for i, t, img in _iter_mcap(video) if i >= decode_from)
         return
     cap = _capture(Path(video.path))
     try:
         i = 0
         while i < video.n_frames:
-            ok, frame = cap.read()
+            if i < decode_from:
+                ok, frame = cap.grab(), None
+            else:
+                ok, frame = cap.read()
             if not ok:
                 raise VideoError(video.path, f"frame {i} of {video.n_frames} cannot be decoded: the "
                                  "file is damaged or truncated", "re-export or re-copy the video")
-            yield i, float(video.t[i]), frame
+            if frame is not None:
+                yield i, float(video.t[i]), frame
             i += 1
     finally:
         cap.release()
+
+
+def iter_frames_i420(video: VideoStream) -> Iterator[tuple[int, float, object]]:
+    """iter_frames, each frame a vision.yuv.YuvFrame (its I420 planes, not converted) where
+    PyAV decodes the file to yuv420p, else a BGR image as iter_frames gives it. The same
+    frames at the same indices and times as iter_frames (tests check it on the sample
+    sessions): a file PyAV cannot open, or a frame it cannot decode, is read from there on by
+    OpenCV, as iter_frames reads it."""
+    if video.source != "file":
+        yield from iter_frames(video)
+        return
+    i = 0
+    for i, frame in _pyav_frames(video):
+        yield i, float(video.t[i]), frame
+        i += 1
+    if i < video.n_frames:  # PyAV stopped early: OpenCV from frame i on
+        yield from iter_frames(video, decode_from=i)
+
+
+def _pyav_frames(video: VideoStream) -> Iterator[tuple[int, object]]:
+    """(index, YuvFrame or BGR image) for as many frames as PyAV decodes, at most n_frames."""
+    try:
+        import av
+        container = av.open(video.path)
+    except Exception:  # no PyAV, or a file it cannot open: OpenCV reads it all
+        return
+    try:
+        stream = container.streams.video[0]
+        stream.thread_type = "AUTO"  # FFmpeg's frame threads: no more CPU a frame than one thread
+        #                              (benchmarks/decoders.py), at 2-4x the wall speed
+        i = 0
+        for frame in container.decode(stream):
+            if i >= video.n_frames:
+                return
+            yield i, _as_planes(frame, video)
+            i += 1
+    except Exception:  # av.error.FFmpegError and kin mid-stream: OpenCV takes over
+        return
+    finally:
+        container.close()
+
+
+def _as_planes(frame, video: VideoStream):
+    from armtrack_cli.vision.yuv import YuvFrame
+
+    if frame.format.name != "yuv420p" or (frame.width, frame.height) != (video.width,
+                                                                         video.height):
+        return frame.to_ndarray(format="bgr24")
+    y, u, v = (np.frombuffer(p, np.uint8).reshape(p.height, p.line_size)[:, :p.width]
+               for p in frame.planes)
+    return YuvFrame(y, u, v)
 
 
 # ---------------------------------------------------------------- MCAP images
@@ -173,25 +230,36 @@ def read_frame(video: VideoStream, index: int) -> np.ndarray:
     raise VideoError(video.path, f"frame {index} cannot be decoded")
 
 
-def iter_frames_ahead(video: VideoStream, depth: int = 16) -> Iterator[tuple[int, float, np.ndarray]]:
-    """iter_frames with decoding on a second thread, so decoding and detection overlap
-    (OpenCV releases the GIL while it decodes and while it filters)."""
+BATCH = 8  # frames handed between the threads at a time: one wake-up per batch, not per frame
+
+
+def iter_frames_ahead(video: VideoStream, depth: int = 16, *, i420: bool = False
+                      ) -> Iterator[tuple[int, float, np.ndarray]]:
+    """iter_frames (or with ``i420`` iter_frames_i420) with decoding on a second thread, so
+    decoding and detection overlap (OpenCV and PyAV release the GIL while they decode, OpenCV
+    while it filters). Frames cross in batches of BATCH, at most ``depth`` frames waiting."""
     import queue
     import threading
 
-    q: queue.Queue = queue.Queue(maxsize=depth)
+    q: queue.Queue = queue.Queue(maxsize=max(1, depth // BATCH))
     stop = threading.Event()
     done = object()
 
     def produce() -> None:
+        batch = []
         try:
-            for item in iter_frames(video):
+            for item in (iter_frames_i420 if i420 else iter_frames)(video):
                 if stop.is_set():
                     return
-                q.put(item)
-        except BaseException as exc:  # handed to the consumer
+                batch.append(item)
+                if len(batch) == BATCH:
+                    q.put(batch)
+                    batch = []
+        except BaseException as exc:  # handed to the consumer, after the frames before it
+            q.put(batch)
             q.put(exc)
             return
+        q.put(batch)
         q.put(done)
 
     th = threading.Thread(target=produce, daemon=True)
@@ -203,7 +271,7 @@ def iter_frames_ahead(video: VideoStream, depth: int = 16) -> Iterator[tuple[int
                 break
             if isinstance(item, BaseException):
                 raise item
-            yield item
+            yield from item
     finally:
         stop.set()
         while th.is_alive():

@@ -1,0 +1,70 @@
+"""Peaks of a sampled signal with a least prominence and a least spacing, in numpy alone: the
+peaks ``scipy.signal.find_peaks(x, prominence=p, distance=d)`` returns, by its own rules
+(a flat top's middle sample, the higher peak kept first when two are closer than d, then
+the prominence over the lowest point to each side before a higher sample), without
+importing scipy.signal (over a second). tests/test_peaks.py holds it to scipy's answer."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def local_maxima(x: np.ndarray) -> np.ndarray:
+    """Indices of the samples above both neighbours; a flat top (a run of equal samples with
+    lower ones on both sides) gives its middle sample, rounded down."""
+    n = x.size
+    if n < 3:
+        return np.zeros(0, int)
+    starts = np.flatnonzero(np.r_[True, x[1:] != x[:-1]])  # runs of equal samples
+    ends = np.r_[starts[1:] - 1, n - 1]
+    inner = (starts > 0) & (ends < n - 1)
+    starts, ends = starts[inner], ends[inner]
+    peak = (x[starts - 1] < x[starts]) & (x[ends + 1] < x[ends])
+    return (starts[peak] + ends[peak]) // 2
+
+
+def by_distance(peaks: np.ndarray, height: np.ndarray, distance: int) -> np.ndarray:
+    """Boolean mask over ``peaks``: the highest kept first, its neighbours closer than
+    ``distance`` samples dropped (ties in the order np.argsort gives, as scipy's)."""
+    keep = np.ones(peaks.size, bool)
+    lo = np.searchsorted(peaks, peaks - distance, side="right")  # the first closer than it
+    hi = np.searchsorted(peaks, peaks + distance, side="left")  # past the last closer
+    for j in np.argsort(height)[::-1].tolist():
+        if keep[j]:
+            keep[lo[j]:j] = False
+            keep[j + 1:hi[j]] = False
+    return keep
+
+
+def _side_min(x: np.ndarray, p: int, step: int) -> float:
+    """The lowest sample from p (included) towards ``step`` (−1 left, +1 right) before the
+    first sample higher than x[p] (or the end)."""
+    w = 64
+    while True:
+        lo, hi = (max(p - w, 0), p) if step < 0 else (p + 1, min(p + 1 + w, x.size))
+        higher = np.flatnonzero(x[lo:hi] > x[p])
+        done = higher.size or (lo == 0 if step < 0 else hi == x.size)
+        if done:
+            if step < 0:
+                first = lo + higher[-1] + 1 if higher.size else 0
+                return float(x[first:p + 1].min())
+            last = lo + higher[0] if higher.size else x.size
+            return float(x[p:last].min())
+        w *= 4
+
+
+def prominences(x: np.ndarray, peaks: np.ndarray) -> np.ndarray:
+    """Each peak's height above the higher of the lowest points to its left and right, each
+    searched up to the first sample higher than the peak."""
+    return np.array([x[p] - max(_side_min(x, p, -1), _side_min(x, p, 1)) for p in peaks],
+                    float)
+
+
+def find_peaks(x: np.ndarray, *, prominence: float, distance: int) -> np.ndarray:
+    """Indices of the local maxima of x (N,) at least ``distance`` samples apart (≥ 1) whose
+    prominence is at least ``prominence``."""
+    x = np.asarray(x, float)
+    peaks = local_maxima(x)
+    if distance > 1 and peaks.size > 1:
+        peaks = peaks[by_distance(peaks, x[peaks], int(np.ceil(distance)))]
+    return peaks[prominences(x, peaks) >= prominence] if peaks.size else peaks

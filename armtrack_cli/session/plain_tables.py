@@ -1,0 +1,128 @@
+"""trajectory-METHOD.csv and kinematics-METHOD.csv read without pandas (compare starts without
+importing it): the files armtrack writes, parsed by numpy and the csv module to the values
+session/tables.py's pandas readers give. Anything those readers would refuse, or read in a
+way this one does not copy (quoted cells, NA spellings, stray spaces, infinities), is handed
+to them, so a bad file gets their one-line error word for word."""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from pathlib import Path
+
+import numpy as np
+
+from armtrack_cli.core.errors import DataError
+from armtrack_cli.core.limits import MAX_TEXT_BYTES
+from armtrack_cli.session.files import regular_file
+
+TRAJECTORY_NEEDS = ("t", "wrist_x", "wrist_y", "wrist_z")
+KINEMATICS_NEEDS = ("measure", "segment", "value", "sd", "unit")
+_EMPTY_CELL = re.compile(r"(?<![^,\n])(?=,|\n|$)")  # a cell with nothing in it
+_INT = re.compile(r"[+-]?\d{1,18}")
+_FLOAT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+MAX_POSITION_M = 100.0  # as session/tables.py: farther from the board is not a measurement
+
+
+class _Irregular(Exception):
+    """The file is not the plain form: the pandas reader decides."""
+
+
+def _text(path: Path, hint: str, *, quotes: bool = False) -> str:
+    regular_file(path, DataError, "a CSV table", hint=hint, max_bytes=MAX_TEXT_BYTES)
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError):
+        raise _Irregular from None
+    if (not quotes and '"' in text) or "\r" in text:
+        raise _Irregular
+    return text
+
+
+def trajectory_columns(path: Path) -> dict[str, np.ndarray]:
+    """trajectory-METHOD.csv as column -> (N,) float64, empty cells NaN: the values of
+    tables.read_trajectory (which checks and reads every file this one does not take)."""
+    path = Path(path)
+    try:
+        return _plain_trajectory(path)
+    except _Irregular:
+        from armtrack_cli.session.tables import read_trajectory
+
+        df = read_trajectory(path)
+        return {str(c): df[c].to_numpy(dtype=float) for c in df.columns}
+
+
+def _plain_trajectory(path: Path) -> dict[str, np.ndarray]:
+    text = _text(path, "run `armtrack fuse SESSION --method M` first")
+    head, _, body = text.partition("\n")
+    names = head.split(",")
+    if (len(set(names)) != len(names) or any(n != n.strip() or not n for n in names)
+            or not set(TRAJECTORY_NEEDS) <= set(names) or not body.strip()):
+        raise _Irregular
+    try:
+        values = np.loadtxt(io.StringIO(_EMPTY_CELL.sub("nan", body.rstrip("\n"))),
+                            delimiter=",", ndmin=2, dtype=float)
+    except ValueError:
+        raise _Irregular from None
+    if values.shape[1] != len(names) or np.isinf(values).any():
+        raise _Irregular
+    cols = {n: np.ascontiguousarray(values[:, k]) for k, n in enumerate(names)}
+    t = cols["t"]
+    if np.isnan(t).any() or (np.diff(t) <= 0).any():
+        raise _Irregular
+    pos = [n for n in names if n.split("_")[0] in ("wrist", "elbow", "shoulder")
+           and n.rsplit("_", 1)[-1] in ("x", "y", "z") and "_v" not in n]
+    if any((np.abs(np.nan_to_num(cols[n])) > MAX_POSITION_M).any() for n in pos):
+        raise _Irregular
+    return cols
+
+
+def kinematics_rows(path: Path) -> list[dict]:
+    """kinematics-METHOD.csv as one dict per row: measure, segment, value, unit as text (a
+    value a number or "not computable: why"), sd, t_start, t_end as floats (NaN where empty)
+    when present: what tables.read_kinematics gives, row by row."""
+    path = Path(path)
+    try:
+        return _plain_kinematics(path)
+    except _Irregular:
+        from armtrack_cli.session.tables import read_kinematics
+
+        return read_kinematics(path).to_dict("records")
+
+
+def _as_text(cells: list[str]) -> list[str]:
+    """A column as pandas reads it and then writes it with astype(str): integers and numbers
+    re-printed from their value, an empty cell as "nan"."""
+    full = [c for c in cells if c]
+    if any(c != c.strip() for c in full):
+        raise _Irregular
+    if full and len(full) == len(cells) and all(_INT.fullmatch(c) for c in full):
+        return [str(int(c)) for c in cells]
+    if full and all(_FLOAT.fullmatch(c) for c in full):
+        return [str(float(c)) if c else "nan" for c in cells]
+    if any(c.lower() in ("na", "n/a", "nan", "null", "none", "-nan", "inf", "-inf") for c in full):
+        raise _Irregular  # NA spellings pandas reads as missing, infinities: its reader decides
+    return [c if c else "nan" for c in cells]
+
+
+def _plain_kinematics(path: Path) -> list[dict]:
+    text = _text(path, "run `armtrack fuse SESSION --method M` first", quotes=True)
+    rows = list(csv.reader(io.StringIO(text)))
+    if not rows or len(set(rows[0])) != len(rows[0]) or not set(KINEMATICS_NEEDS) <= set(rows[0]):
+        raise _Irregular
+    names, body = rows[0], rows[1:]
+    if not body or any(len(r) != len(names) for r in body):
+        raise _Irregular
+    cols = {n: [r[k] for r in body] for k, n in enumerate(names)}
+    out = {n: _as_text(cols[n]) for n in ("measure", "segment", "value", "unit")}
+    if any(not (v.startswith("not computable") or _FLOAT.fullmatch(v)) for v in out["value"]):
+        raise _Irregular
+    for n in ("sd", "t_start", "t_end"):
+        if n in cols:
+            if any(c and not _FLOAT.fullmatch(c) for c in cols[n]):
+                raise _Irregular
+            out[n] = [float(c) if c else float("nan") for c in cols[n]]
+    for n in names:
+        out.setdefault(n, _as_text(cols[n]))
+    return [{n: out[n][i] for n in names} for i in range(len(body))]
