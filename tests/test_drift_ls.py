@@ -85,3 +85,14 @@ def test_a_stage_imports_only_its_own_libraries():
             "print(callable(pipeline.fuse) and pipeline.fuse.__module__)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "armtrack_cli.pipeline.fuse"  # the stage, not its module
+
+
+def test_the_fuse_stage_loads_its_table_and_fitting_libraries_on_use():
+    """Importing the fuse stage loads neither pandas (read and written tables only) nor
+    scipy's interpolate, optimize and signal (the IMU offset check only): a process holds
+    each library only from the step that needs it (issue 15)."""
+    code = ("import sys; from armtrack_cli import pipeline; pipeline.fuse; print(' '.join(m for m "
+            "in ('pandas', 'scipy.interpolate', 'scipy.optimize', 'scipy.signal') "
+            "if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""

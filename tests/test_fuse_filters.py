@@ -94,6 +94,8 @@ def test_rts_smooth_is_the_textbook_smoother(block):
         P_ref[k] = P[k] + C @ (P_ref[k + 1] - Pp) @ C.T
     np.testing.assert_allclose(xs, x_ref, rtol=0, atol=1e-10)
     np.testing.assert_allclose(Ps, P_ref, rtol=0, atol=1e-12)
+    xm, none = gaussian.rts_smooth(x, P, F, b, Q, block=block, means_only=True)
+    assert none is None and np.array_equal(xm, xs)  # the means need no smoothed covariance
 
 
 def test_smooth_uses_the_steps_of_every_frame():

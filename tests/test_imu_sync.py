@@ -145,3 +145,17 @@ def test_rays_meet_the_true_sheet_where_they_graze():
     for delta in (0.04, 0.05, 0.0627):
         err = np.linalg.norm(wrist_on_rays(p, delta) - true, axis=1)
         assert np.mean(err > 0.05) < 0.005, delta
+
+
+@pytest.mark.parametrize("offset_s,task,seed", [(0.5, "circle", 0), (-0.2, "figure8", 4),
+                                                (0.05, "reach", 2)])
+def test_coarse_to_fine_grid_finds_the_full_grids_offset(offset_s, task, seed, monkeypatch):
+    """The grid scored every COARSE frames and then finely about the best gives the offset
+    and SD the grid scored at every frame gives (its basin is many frames wide)."""
+    from armtrack_cli.fuse import imu_sync
+
+    p = case(offset_s, task=task, seed=seed)
+    fast = estimate_imu_offset(p, search_s=1.0)
+    monkeypatch.setattr(imu_sync, "COARSE", 1)
+    full = estimate_imu_offset(p, search_s=1.0)
+    assert fast == full

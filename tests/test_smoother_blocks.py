@@ -11,7 +11,7 @@ import pytest
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.fuse import arm_smoother, imu_fold, models
+from armtrack_cli.fuse import arm_smoother, imu_fold, models, rest
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
 from armtrack_cli.fuse.smoother_kernel import smooth
@@ -103,3 +103,78 @@ def test_fold_in_chunks_equals_one_chunk(hold, monkeypatch):
     parts = imu_fold.fold(t, q, f, tf, hold=hold)
     for name in ("dp", "dv", "A_p", "A_v", "B_p", "B_v"):
         assert np.abs(getattr(parts, name) - getattr(whole, name)).max() < 1e-14, name
+
+
+def _plain_run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm):
+    """arm_smoother.run as one plain pass over the whole session (smoother_kernel.smooth on
+    every frame's arrays at once, the zero-velocity rows inserted by rest.with_rows over the
+    whole session): the form the checkpointed pass replaced, its reference."""
+    m_pre, tf, z, q_hat, first = arm_smoother.pre_roll(imu, tf, z, q_hat, first, s)
+    fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, tf, hold=s.imu_hold)
+    track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, tf)
+    F, b, Q = arm_smoother.process(fd, s, None, float(np.median(np.diff(imu.t))), track)
+    m0, Pm0 = arm_smoother.prior(x0, P0, s, None, True)
+    X = np.zeros((tf.size, m0.size))
+    X[:, :6] = first
+    still = arm_smoother.resting(imu, tf, z, s, m_pre)
+    rk = s.constraint_sigma_m**2
+    for _ in range(s.smoother_iterations):
+        Hc, zc, Hk, zk = arm_smoother.linearise(X, z, q_hat, cam, arm, arm.shoulder)
+        ins = rest.with_rows(still, s.rest_velocity_sd_m_s, rk, F, b, Q, Hc, zc,
+                             np.isfinite(z).all(axis=1), Hk, zk, np.ones(tf.size, bool))
+        Xn, _, _ = smooth(m0, Pm0, *ins.arrays[:6], s.pixel_sigma**2, *ins.arrays[6:], rk,
+                          s.gate_chi2)
+        step = np.abs(Xn[ins.real, :3] - X[:, :3]).max()
+        X = Xn[ins.real]
+        if step < arm_smoother.STEP_TOL_M:
+            break
+    return X[m_pre:], still[m_pre:].sum()
+
+
+def test_rest_rows_inserted_per_block_equal_the_plain_pass(monkeypatch):
+    """The arm smoother with the rest update (zero-velocity rows after each resting frame,
+    fuse/rest.py), run block by block with blocks that end inside and at the edges of rest
+    runs, equals the plain pass over the whole session to 1e-9 m."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0, 20, 0.01)
+    moving = ((t > 4) & (t < 9)) | (t > 14)
+    q = quat.normalize(np.array([1.0, 0.1, 0, 0]) + np.where(
+        moving[:, None], 0.02 * np.sin(t)[:, None], 0.0) + 1e-4 * rng.standard_normal((t.size, 4)))
+    f = np.where(moving[:, None], 0.5 * rng.standard_normal((t.size, 3)), 0.01 * rng.standard_normal(
+        (t.size, 3))) + [0, 0, 9.81]
+    w = np.where(moving[:, None], 0.3, 0.005) * rng.standard_normal((t.size, 3))
+    tf = np.arange(1.2, 19.9, 1 / 30)
+    cam = models.Projection(_camera())
+    arm = models.Arm(shoulder=np.array([0.1, 0.5, 0.3]), L1=0.3, L2=0.27,
+                     forearm_B=np.array([0.0, 1.0, 0.0]))
+    first = np.zeros((tf.size, 6))
+    go = np.interp(tf, t, moving.astype(float)) > 0
+    first[:, :3] = [0.3, 0.2, 0.1] + 0.05 * np.where(go, np.sin(tf), np.sin(4.0))[:, None]
+    z = cam(first[:, :3]) + 0.1 * rng.standard_normal((tf.size, 2))
+    z[rng.random(tf.size) < 0.05] = np.nan
+    imu = arm_smoother.ImuSamples(t, q, f, w)
+    q_hat = quat.interpolate(t, q, tf)
+    s = FuseSettings(rest_velocity_sd_m_s=0.05, smoother_iterations=3)
+    x0, P0 = first[0], np.eye(6) * 0.01
+    ref, n_rest = _plain_run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm)
+    assert n_rest > 100  # resting frames, in runs that the blocks below cut
+    monkeypatch.setattr(arm_smoother, "smooth_blocked",
+                        lambda *a, **k: smooth_blocked(*a, **k, block=37))
+    got = arm_smoother.run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm)
+    assert got.x.shape[0] == tf.size
+    assert np.abs(got.x[:, :3] - ref[:, :3]).max() < 1e-9
+
+
+def test_orientation_track_in_chunks_equals_one_chunk(monkeypatch):
+    """∫R dt and the gyro's orientation track summed a few IMU intervals at a time (the sum
+    carried across chunks) equal one sum over the whole recording, bit for bit."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0, 5, 0.01) + 0.003
+    q = quat.normalize(np.array([1.0, 0.2, 0, 0]) + 0.1 * rng.standard_normal((t.size, 4)))
+    w = rng.standard_normal((t.size, 3))
+    tf = np.arange(0.1, 4.9, 1 / 30)
+    whole = imu_fold.orientation_track(t, q, w, tf), imu_fold.rotation_integral(t, q)
+    monkeypatch.setattr(imu_fold, "FOLD_CHUNK", 7)
+    parts = imu_fold.orientation_track(t, q, w, tf), imu_fold.rotation_integral(t, q)
+    assert np.array_equal(parts[0].dtheta, whole[0].dtheta)
+    assert np.array_equal(parts[0].G, whole[0].G) and np.array_equal(parts[1], whole[1])

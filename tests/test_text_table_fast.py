@@ -57,3 +57,42 @@ def test_a_bad_cell_is_still_named(tmp_path):
     lines = ["a\tb\tc", "1\t2\t3", "4\tx\t6"]
     with pytest.raises(DataError, match="line 3, column 'b': 'x' is not a number"):
         text_table.parse_table(tmp_path / "f.tsv", lines, 0, "\t", DataError)
+
+
+def _long_export(tmp_path, monkeypatch, edit=None):
+    """circle-01's IMU export, read as a long file would be (session/text_head.py: a head
+    of 4 kB, the body from the file), after ``edit`` of its lines."""
+    from armtrack_cli.session import text_head
+
+    lines = (SAMPLES / "circle-01" / "imu.txt").read_text().splitlines()
+    if edit:
+        edit(lines)
+    path = tmp_path / "imu.txt"
+    path.write_text("\n".join(lines) + "\n")
+    monkeypatch.setattr(text_head, "HEAD_BYTES", 4096)
+    return path
+
+
+def test_a_long_export_reads_as_a_short_one(tmp_path, monkeypatch):
+    """The head and the file's body read by numpy give the IMU read whole, line by line."""
+    from armtrack_cli.session.imu import read_imu
+
+    whole = read_imu(SAMPLES / "circle-01" / "imu.txt")
+    long = read_imu(_long_export(tmp_path, monkeypatch))
+    for name in ("t", "acc", "gyr", "quat"):
+        np.testing.assert_array_equal(getattr(long, name), getattr(whole, name))
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda ls: ls.__setitem__(900, ls[900].replace("\t", "\tx", 1)), r"line 901, column"),
+    (lambda ls: ls.insert(700, ""), None),  # a blank line: read row by row, the same rows
+])
+def test_a_long_export_names_its_bad_line(tmp_path, monkeypatch, edit, message):
+    from armtrack_cli.session.imu import read_imu
+
+    path = _long_export(tmp_path, monkeypatch, edit)
+    if message is None:
+        assert read_imu(path).n == read_imu(SAMPLES / "circle-01" / "imu.txt").n
+    else:
+        with pytest.raises(DataError, match=message):
+            read_imu(path)

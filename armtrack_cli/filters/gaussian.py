@@ -143,7 +143,8 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
 
 def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
                b: np.ndarray | None = None, Q: np.ndarray | None = None, *, steps=None,
-               block: int = 4096) -> tuple[np.ndarray, np.ndarray]:
+               block: int = 4096, means_only: bool = False
+               ) -> tuple[np.ndarray, np.ndarray | None]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
     x (n_steps, n), P (n_steps, n, n): filtered means and covariances; F (n_steps, n, n),
@@ -155,11 +156,12 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
     x^s_k = x_k + gain_k (x^s_{k+1} − x⁻_{k+1}),
     P^s_k = P_k + gain_k (P^s_{k+1} − P⁻_{k+1}) gain_kᵀ (Rauch, Tung & Striebel 1965).
     Instead of F, b, Q: ``steps(lo, hi)`` giving their rows [lo, hi), one block at a time, so
-    that they are never held for the whole session.
+    that they are never held for the whole session. ``means_only``: the smoothed means alone
+    (they need no smoothed covariance), Ps None.
     """
     if steps is None:
         steps = lambda lo, hi: (F[lo:hi], b[lo:hi], Q[lo:hi])  # noqa: E731
-    xs, Ps = x.copy(), P.copy()
+    xs, Ps = x.copy(), None if means_only else P.copy()
     for stop in range(x.shape[0] - 1, 0, -block):  # steps k in [start, stop), backwards
         start = max(0, stop - block)
         Fn, bn, Qn = steps(start + 1, stop + 1)
@@ -171,6 +173,8 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
         for j in range(stop - start - 1, -1, -1):
             k = start + j
             xs[k] = x[k] + gain[j] @ (xs[k + 1] - xp[j])
+            if means_only:
+                continue
             Pk = P[k] + gain[j] @ (Ps[k + 1] - Pp[j]) @ gain[j].T
             Ps[k] = 0.5 * (Pk + Pk.T)
     return xs, Ps

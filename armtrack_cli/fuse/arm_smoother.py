@@ -32,7 +32,6 @@ from armtrack_cli.fuse import imu_fold, rest
 from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
-from armtrack_cli.fuse.smoother_kernel import smooth
 
 P_, V_, TH, BA, BG = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
 STEP_TOL_M = 1e-5  # Gauss–Newton has converged when no wrist position moves more than this
@@ -249,37 +248,24 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
         X[:, drift_slice(m0.size)] = m0[drift_slice(m0.size)]
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
-    if s.rest_velocity_sd_m_s <= 0:  # no zero-velocity rows: the memory-flat pass
-        return _run_blocked(fd, track, period, (m0, Pm0), X, z, q_hat, proj, s, arm, shoulder,
-                            gyro, use_c, use_k)
-    F, b, Q = process(fd, s, shoulder, period, track)
-    rc, rk = s.pixel_sigma**2, s.constraint_sigma_m**2
     still = resting(imu, t_frames, z, s, m_pre)
-    iterations, step = 0, np.inf
-    while iterations < s.smoother_iterations and step >= STEP_TOL_M:
-        Hc, zc, Hk, zk = linearise(X, z, q_hat, proj, arm,
-                                   None if shoulder is not None else arm.shoulder)
-        ins = rest.with_rows(still, s.rest_velocity_sd_m_s, rk, F, b, Q, Hc, zc, use_c, Hk,
-                             zk, use_k)
-        F2, b2, Q2, Hc2, zc2, use_c2, Hk2, zk2, use_k2 = ins.arrays
-        Xn, P, gated = smooth(m0, Pm0, F2, b2, Q2, Hc2, zc2, use_c2, rc, Hk2, zk2, use_k2, rk,
-                              float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf)  # 0: off
-        if not ins.real.all():  # drop the zero-velocity steps
-            Xn, P, gated = Xn[ins.real], P[ins.real], gated[ins.real]
-        step = np.abs(Xn[:, P_] - X[:, P_]).max()
-        X, iterations = Xn, iterations + 1
-    X, P, gated, q_hat = X[m_pre:], P[m_pre:], gated[m_pre:], q_hat[m_pre:]  # the video's
-    return Smoothed(X, P[:, :6, :6], corrected(q_hat, X[:, TH]), _elbow_cov(q_hat, X, P, arm),
-                    gated, iterations, gyro)
+    X, P_pv, elbow_cov, gated, iterations = _iterate(fd, track, period, (m0, Pm0), X, z, q_hat,
+                                                     proj, s, arm, shoulder, use_c, use_k, still)
+    X, q_hat = X[m_pre:], q_hat[m_pre:]  # the video's frames
+    return Smoothed(X, P_pv[m_pre:], corrected(q_hat, X[:, TH]), elbow_cov[m_pre:],
+                    gated[m_pre:], iterations, gyro)
 
 
-def _run_blocked(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, gyro, use_c,
-                 use_k) -> Smoothed:
-    """run()'s iterations without zero-velocity rows, each a checkpointed pass
-    (fuse/smoother_blocks.py: equal to the plain pass, memory flat in the session's length):
-    the model built a block of frames at a time, only the (p, v) and elbow covariances kept."""
+def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
+             still) -> tuple:
+    """run()'s Gauss–Newton iterations, each a checkpointed pass (fuse/smoother_blocks.py:
+    equal to the plain pass, memory flat in the session's length): the model built a block of
+    frames at a time, with the zero-velocity rows of its resting frames (``still``,
+    fuse/rest.py) inserted, and only the (p, v) and elbow covariances kept. Returns X, the
+    (p, v) and elbow covariances, the gated detections and the iterations run."""
     n = X.shape[0]
     sh_fixed = None if shoulder is not None else arm.shoulder
+    rk = s.constraint_sigma_m**2
     P_pv, elbow_cov = np.empty((n, 6, 6)), np.empty((n, 3, 3))
     iterations, step, gated = 0, np.inf, np.zeros(n, bool)
     while iterations < s.smoother_iterations and step >= STEP_TOL_M:
@@ -289,19 +275,22 @@ def _run_blocked(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder,
             F, b, Q = process(_rows(fd, lo, hi), s, shoulder, period,
                               None if track is None else _rows(track, lo, hi))
             Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed)
-            return F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi]
+            arrays = (F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi])
+            if not still[lo:hi].any():
+                return arrays
+            ins = rest.with_rows(still[lo:hi], s.rest_velocity_sd_m_s, rk, *arrays)
+            return (*ins.arrays, ins.real)
 
         def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, Xn=Xn) -> None:
             Xn[lo:hi], P_pv[lo:hi] = xs, Ps[:, :6, :6]
             elbow_cov[lo:hi] = _elbow_cov(q_hat[lo:hi], xs, Ps, arm)
 
-        gated = smooth_blocked(*prior_, model, n, rc=s.pixel_sigma**2,
-                               rk=s.constraint_sigma_m**2,
+        gated = smooth_blocked(*prior_, model, n, rc=s.pixel_sigma**2, rk=rk,
                                gate=float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf,  # 0: off
                                keep=keep)
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
         X, iterations = Xn, iterations + 1
-    return Smoothed(X, P_pv, corrected(q_hat, X[:, TH]), elbow_cov, gated, iterations, gyro)
+    return X, P_pv, elbow_cov, gated, iterations
 
 
 def _rows(a, lo: int, hi: int):

@@ -133,18 +133,29 @@ def _at(t_src: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:
 def rotation_integral(t_imu: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
     """(M, 3, 3) s: ∫R_WB dt from the first IMU sample (trapezoidal), what a constant vector
     in B (a bias) integrates to in W."""
-    R = quat.to_matrix(q_WB)
-    return np.concatenate([np.zeros((1, 3, 3)), np.cumsum(
-        0.5 * (R[1:] + R[:-1]) * np.diff(t_imu)[:, None, None], axis=0)])
+    out = np.zeros((t_imu.size, 3, 3))
+    for a in range(0, t_imu.size - 1, FOLD_CHUNK):  # a chunk of intervals at a time: the
+        b = min(a + FOLD_CHUNK, t_imu.size - 1)  # temporaries bounded however long the session
+        R = quat.to_matrix(q_WB[a:b + 1])
+        step = 0.5 * (R[1:] + R[:-1]) * np.diff(t_imu[a:b + 1])[:, None, None]
+        # the running sum continued from the last chunk's end: the same additions in the
+        # same order as one cumsum over the whole recording
+        out[a + 1:b + 1] = np.cumsum(np.concatenate([out[a:a + 1], step]), axis=0)[1:]
+    return out
 
 
 def orientation_track(t_imu: np.ndarray, q_WB: np.ndarray, w_B: np.ndarray,
                       t_frames: np.ndarray) -> OrientationTrack:
     """The orientation error's change between frames t_frames (n,) from the IMU's output
     orientation q_WB (M, 4) and gyro w_B (M, 3) rad/s at t_imu (M,) s (module docstring)."""
-    dq = gyro_steps(t_imu, w_B)  # the body's rotation over each interval
-    D = quat.multiply(quat.multiply(q_WB[1:], quat.conjugate(dq)), quat.conjugate(q_WB[:-1]))
-    cum = np.concatenate([np.zeros((1, 3)), np.cumsum(quat.to_rotvec(D), axis=0)])
+    cum = np.zeros((t_imu.size, 3))  # Σ rotvec(D_j), a chunk of intervals at a time
+    for a in range(0, t_imu.size - 1, FOLD_CHUNK):
+        b = min(a + FOLD_CHUNK, t_imu.size - 1)
+        dq = gyro_steps(t_imu[a:b + 1], w_B[a:b + 1])  # the body's rotation over each interval
+        D = quat.multiply(quat.multiply(q_WB[a + 1:b + 1], quat.conjugate(dq)),
+                          quat.conjugate(q_WB[a:b]))
+        cum[a + 1:b + 1] = np.cumsum(np.concatenate([cum[a:a + 1], quat.to_rotvec(D)]),
+                                     axis=0)[1:]  # continued: one cumsum's additions
     cum_G = rotation_integral(t_imu, q_WB)
     c, G = _at(t_imu, cum, t_frames), _at(t_imu, cum_G, t_frames)
     return OrientationTrack(np.concatenate([np.zeros((1, 3)), np.diff(c, axis=0)]),

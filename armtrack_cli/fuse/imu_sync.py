@@ -17,7 +17,8 @@ spline loose enough to absorb it absorbs too (a circle's timing was lost to 25 m
 gyro, the leak is one constant, and a stiff spline keeps the motion's timing.
 J_k is taken where the detection's ray meets the
 arm's sphere (eq. 15, the IMU's orientation at t_k − δ). Cost: the fit's mean squared
-residual over the frames both cover. A grid at one frame period over the search window finds
+residual over the frames both cover. A grid at one frame period over the search window (scored
+every COARSE periods, then at every period about the best of those) finds
 the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
 SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
 (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
@@ -31,10 +32,9 @@ gives no IMU velocity. Measured in docs/validation-sync.md.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.interpolate import CubicHermiteSpline
 
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
@@ -55,6 +55,7 @@ GAP_S = 0.1  # an IMU gap longer than this is missing, not interpolated across
 BRIDGE_S = 0.1  # detections lost for at most this long are bridged for the derivative
 MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be scored
 MIN_FRAMES = 30
+COARSE = 3  # the grid is scored every COARSE frame periods, then finely about the best
 REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
 GRAZE_M = 0.15  # m: intersections closer than this along the ray are a grazing ray's (with 0.5 px
 #                of noise a grazing ray's two part by 10 cm from one frame to the next)
@@ -110,10 +111,16 @@ class _Prepared:
     window: int
 
 
-def _prepare(p: SyncProblem, delta: float) -> _Prepared:
+def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Prepared:
+    """The fit's parts at δ; given ``like`` (another δ's), only the Jacobians (the rays'
+    depths move with δ), the rest shared with it: one copy of the per-sample arrays."""
+    from scipy.interpolate import CubicHermiteSpline  # imported where used (issue 15)
+
+    J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
+    if like is not None:
+        return replace(like, J=J)
     dt = float(np.median(np.diff(p.t_frames)))
     window = max(5, int(round(WINDOW_S / dt)) | 1)
-    J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
     drift = _spline_basis(p.t_frames)
     v_imu = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (p.a_W[1:] + p.a_W[:-1])
                                                    * np.diff(p.t_imu)[:, None], axis=0)])
@@ -316,9 +323,7 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
         return None
     step = pre.dt
     grid = centre_s + np.arange(-search_s, search_s + step / 2, step)
-    cache: dict = {}
-    costs = np.array([cost(d, p, pre, n_img, cache) for d in grid])
-    del cache  # the grid's normal equations: the refinements keep their own
+    costs = _grid_costs(grid, p, pre, n_img)
     if not np.isfinite(costs).any():
         return None
     delta = float(grid[int(np.argmin(costs))])
@@ -327,7 +332,7 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
     # (only it and the latest: each holds per-sample arrays)
     best = last = _refine(p, pre, n_img, delta, step) + (pre,)
     for _ in range(REPREPARE):  # the rays' depths with the IMU's orientation at the latest δ
-        pre = _prepare(p, last[0])
+        pre = _prepare(p, last[0], like=pre)
         now = _refine(p, pre, n_img, last[0], step) + (pre,)
         best = now if now[1] < best[1] else best  # the first of equals, as min() took it
         done, last = abs(now[0] - last[0]) < 1e-3, now
@@ -337,6 +342,22 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
     last = now = None  # noqa: F841 (their arrays freed before the SD)
     sd, frames = _sd(p, pre, delta)
     return ImuOffset(delta, sd, frames)
+
+
+def _grid_costs(grid: np.ndarray, p: SyncProblem, pre: _Prepared, n_img: int) -> np.ndarray:
+    """The cost at every COARSE-th δ of the grid, then at each δ within COARSE − 1 of the
+    best of those (coarse to fine: the basin is many frames wide); inf where not evaluated."""
+    costs = np.full(grid.size, np.inf)
+    cache: dict = {}  # the grid's normal equations: the refinements keep their own
+    coarse = np.unique(np.r_[np.arange(0, grid.size, COARSE), grid.size - 1])
+    for i in coarse:
+        costs[i] = cost(grid[i], p, pre, n_img, cache)
+    if np.isfinite(costs).any():
+        best = int(np.argmin(costs))
+        for i in range(max(best - COARSE + 1, 0), min(best + COARSE, grid.size)):
+            if i not in coarse:
+                costs[i] = cost(grid[i], p, pre, n_img, cache)
+    return costs
 
 
 def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
@@ -359,15 +380,11 @@ def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
     over the scale and the drift): SD² = 2 σ² / S'', σ² = S / (2n − parameters), inflated by
     (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ; and the frames used."""
     h = 0.5 * pre.dt
-    r0, n_par, ok = _fit(p, pre, delta)
-    _, ok_pm = _mask(p, pre, delta + h)
-    ok = ok & ok_pm & _mask(p, pre, delta - h)[1]
-    rss = []
-    for d in (delta - h, delta, delta + h):
-        r, n_par, _ = _fit(p, pre, d, ok)
-        rss.append(float(np.sum(r**2)))
+    ok = _mask(p, pre, delta)[1] & _mask(p, pre, delta + h)[1] & _mask(p, pre, delta - h)[1]
+    fits = [_fit(p, pre, d, ok)[:2] for d in (delta - h, delta, delta + h)]  # three fits
+    rss = [float(np.sum(r**2)) for r, _ in fits]
     curv = (rss[0] - 2 * rss[1] + rss[2]) / h**2
-    r, _, _ = _fit(p, pre, delta, ok)
+    r, n_par = fits[1]
     sigma2 = rss[1] / max(r.size - n_par, 1)
     rho = float(np.mean([np.corrcoef(r[:-1, k], r[1:, k])[0, 1] for k in range(2)]))
     rho = min(max(rho, 0.0), 0.99)

@@ -303,8 +303,8 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
-            return run_arm_smoother(inp, x0, P0, proj, s, arm,
-                                    smooth(est, inp, s, "pf-constraint").mean)
+            return run_arm_smoother(inp, x0, P0, proj, s, arm,  # the means alone
+                                    smooth(est, inp, s, "pf-constraint", means_only=True).mean)
     else:
         raise ValueError(f"unknown method {method!r}")
     if s.smoother == "rts":
@@ -373,11 +373,13 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
                      summary=summary)
 
 
-def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimates:
+def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str, *,
+           means_only: bool = False) -> Estimates:
     """Offline: each frame's estimate also uses every later detection. The filtered Gaussian
     (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
     through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
-    to the process noise of each step."""
+    to the process noise of each step. ``means_only``: the means alone (cov None), all the
+    arm smoother's first pass takes."""
     walk = np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2) \
         if method == "pf-constraint" else 0.0
 
@@ -385,5 +387,6 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str) -> Estimat
         F, b, Q = inp.steps.stacked(lo, hi)  # a block at a time: memory flat with the length
         return F, b, Q + walk + 1e-12 * np.eye(6)
 
-    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), steps=steps)
+    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), steps=steps,
+                               means_only=means_only)  # P None then
     return Estimates(x, P, est.ess, est.codes)

@@ -16,7 +16,8 @@ moving slowly and straight can keep the IMU quiet; the camera sees it move).
 ``with_rows`` hands the zero-velocity rows to the smoother kernel (fuse/smoother_kernel.py,
 which takes one scalar row per step besides the camera's) as zero-length steps inserted
 after each rest frame (F = I, b = 0, Q = 0: the state does not change across them), each
-carrying one axis of v = 0; ``drop`` removes them from the result.
+carrying one axis of v = 0, a block of frames at a time (arm_smoother._iterate); only the
+real rows are kept.
 """
 
 from __future__ import annotations

@@ -20,16 +20,13 @@ from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.methods import Inputs, load_kernels, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
-from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
 from armtrack_cli.session.arm_file import write_arm_estimate
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
-from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.recipe import section
-from armtrack_cli.session.tables import read_patch_detections
 from armtrack_cli.session.video import probe_video
 
 
@@ -62,6 +59,8 @@ class Prepared:
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
+    from armtrack_cli.session.tables import read_patch_detections  # pandas: imported on use
+
     require(session, "imu")
     require(session, "camera")
     cam = read_calibrated_camera(dest / "camera.yaml")
@@ -145,6 +144,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     start, cpu = time.perf_counter(), time.process_time()
     est = run(s.method, inp, x0, P0, p.projection, s, p.arm)
     elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
+    from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
+
     table = trajectory_table(p.t_frames, p.frames, est, inp, p.arm)
     name = f"trajectory-{s.method}.csv"
     if not np.isfinite(est.mean).all():
@@ -187,6 +188,7 @@ def _write(dest: Path, method: str, table, session: Session, q_WB: np.ndarray,
            settings: dict, auto) -> None:
     """The trajectory, its measures (kinematics-METHOD.csv) and the auto arm, all or none."""
     from armtrack_cli.pipeline.kinematics import kinematics_table
+    from armtrack_cli.session.outputs import output_set, write_table
 
     kin = kinematics_table(table, session, q_WB=q_WB)
     with output_set():

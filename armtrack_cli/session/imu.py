@@ -17,7 +17,7 @@ from armtrack_cli.core.streams import ImuSamples
 from armtrack_cli.session import imu_csv, imu_mcap, xsens
 from armtrack_cli.session.files import regular_file
 from armtrack_cli.session.orientation import estimate_orientation
-from armtrack_cli.session.text_table import read_text_lines
+from armtrack_cli.session.text_head import read_text_head
 
 FORMATS = "Xsens MT Manager export, Xsens DOT CSV, generic CSV (t,ax,ay,az,gx,gy,gz) or MCAP"
 
@@ -40,7 +40,7 @@ def read_imu(path: str | Path, *, rate_hz: float | None = None, topic: str | Non
     else:
         if head.startswith(b"\x89MCAP"):
             raise ImuFileError(path, "is a damaged MCAP file (bad magic)")
-        lines = read_text_lines(path, ImuFileError, f"an IMU file ({FORMATS})")
+        lines = read_text_head(path, ImuFileError, f"an IMU file ({FORMATS})")
         if xsens.looks_like_dot(lines):
             samples = xsens.read_dot(path, rate_hz=rate_hz, lines=lines)
         elif xsens.looks_like_mt_manager(lines):

@@ -14,6 +14,7 @@ import numpy as np
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.limits import MAX_TEXT_BYTES
 from armtrack_cli.session.files import regular_file
+from armtrack_cli.session.text_head import numbers_after
 
 MISSING_TOKENS = {"", "nan", "na", "n/a", "null", "-nan"}
 
@@ -49,6 +50,11 @@ def read_text_lines(path: Path, error: type[DataError], what: str) -> list[str]:
     Binary files (NUL bytes) and empty files are refused with ``error``.
     """
     raw = regular_file(path, error, what, max_bytes=MAX_TEXT_BYTES).read_bytes()
+    return decode_text(path, raw, error, what).splitlines()
+
+
+def decode_text(path: Path, raw: bytes, error: type[DataError], what: str) -> str:
+    """read_text_lines' checks and decoding of a file's bytes (or its head's)."""
     if not raw.strip():
         raise error(path, f"is empty, expected {what}")
     if b"\x00" in raw[:65536]:
@@ -59,7 +65,7 @@ def read_text_lines(path: Path, error: type[DataError], what: str) -> list[str]:
         text = raw.decode("latin-1")  # older Windows exports (degree signs in cp1252)
     if sum(not (c.isprintable() or c in "\r\n\t") for c in text[:4096]) > 20:
         raise error(path, f"is not a text file, expected {what}")
-    return text.splitlines()
+    return text
 
 
 def sniff_delimiter(header: str) -> str | None:
@@ -130,9 +136,14 @@ def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | N
     if not header:
         raise error(path, f"line {header_at + 1}: the column header is empty")
     n = len(header)
-    fast = _plain_numbers(lines, header_at, delimiter, n, skip_prefixes)
+    if getattr(lines, "whole", True):
+        fast = _plain_numbers(lines, header_at, delimiter, n, skip_prefixes)
+    else:  # a long file's head (session/text_head.py): its numbers from the file itself
+        fast = None if skip_prefixes else numbers_after(path, header_at, delimiter, n)
     if fast is not None:
         return TextTable(header, *fast)
+    if not getattr(lines, "whole", True):  # the row-by-row parse, over every line
+        lines = read_text_lines(path, error, "a text table")
     rows: list[list[str]] = []
     line_no: list[int] = []
     notes: list[str] = []
