@@ -303,8 +303,9 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
-            return run_arm_smoother(inp, x0, P0, proj, s, arm,  # the means alone
-                                    smooth(est, inp, s, "pf-constraint", means_only=True).mean)
+            first = smooth(est, inp, s, "pf-constraint", means_only=True).mean  # the means alone
+            del est  # its (n, 6, 6) covariances, not held through the smoother (issue 15)
+            return run_arm_smoother(inp, x0, P0, proj, s, arm, first)
     else:
         raise ValueError(f"unknown method {method!r}")
     if s.smoother == "rts":
