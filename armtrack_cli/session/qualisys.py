@@ -15,7 +15,8 @@ import numpy as np
 from armtrack_cli.core.errors import GroundTruthError, did_you_mean
 from armtrack_cli.core.limits import MAX_SESSION_S
 from armtrack_cli.core.streams import MarkerTrajectories
-from armtrack_cli.session.text_table import parse_table, read_text_lines
+from armtrack_cli.session.text_head import read_text_head
+from armtrack_cli.session.text_table import parse_rows, parse_table
 
 MM = 1e-3  # QTM exports millimetres
 _KEY = re.compile(r"^[A-Z][A-Z0-9_]*(\t|$)")
@@ -38,7 +39,7 @@ def _header(path: Path, lines: list[str]) -> tuple[dict[str, list[str]], int]:
 
 def read_qualisys(path: str | Path) -> MarkerTrajectories:
     path = Path(path)
-    lines = read_text_lines(path, GroundTruthError, "a Qualisys TSV export")
+    lines = read_text_head(path, GroundTruthError, "a Qualisys TSV export")  # the rest streamed
     keys, at = _header(path, lines)
     if "NO_OF_BODIES" in keys or "BODY_NAMES" in keys or keys.get("DATA_INCLUDED", [""])[0] == "6D":
         raise GroundTruthError(path, "is a 6DOF (rigid body) export",
@@ -71,9 +72,8 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
         time_col = cols.index("time") if "time" in cols else None
         first = len([c for c in (frame_col, time_col) if c is not None])
     else:
-        fake = "\t".join(f"c{k}" for k in range(len(lines[at].rstrip("\t\r\n").split("\t"))))
-        tab = parse_table(path, [fake] + lines[at:], 0, "\t", GroundTruthError)
-        tab = type(tab)(tab.header, tab.data, tab.line_of + at - 1, tab.notes)
+        fake = [f"c{k}" for k in range(len(lines[at].rstrip("\t\r\n").split("\t")))]
+        tab = parse_rows(path, lines, at, fake, "\t", GroundTruthError)
         n = tab.data.shape[1]
         first = n - 3 * m
         if first not in (0, 1, 2):
