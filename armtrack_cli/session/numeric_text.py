@@ -20,12 +20,12 @@ import numpy as np
 
 from armtrack_cli.core.errors import DataError
 
-CHUNK_BYTES = 1 << 22  # 4 MB of text a chunk: ~40,000 rows of an IMU export
-CHUNK_LINES = 40_000  # the same for lines already in memory
+CHUNK_BYTES = 1 << 20  # 1 MB of text a chunk: ~10,000 rows of an IMU export
+CHUNK_LINES = 10_000  # the same for lines already in memory
 MISSING_TOKENS = frozenset({"", "nan", "na", "n/a", "null", "-nan"})
 FAST_DELIMITERS = ("\t", ",", ";", None)  # what loadtxt splits as the row-by-row parse does
 SEPARATOR = {"\t": "tab", ",": "comma", ";": "semicolon", " ": "space", None: "space"}
-_EMPTY = {d: re.compile(rf"(?<![^{re.escape(d)}\n])(?={re.escape(d)}|\n|\Z)")
+_EMPTY = {d: re.compile(rf"(?<![^{re.escape(d)}\n])(?={re.escape(d)}|\n|\Z)".encode())
           for d in FAST_DELIMITERS if d}  # where a cell has nothing in it
 
 
@@ -66,14 +66,14 @@ def file_rows(path: Path, first_line: int, layout: Layout, error: type[DataError
 def line_rows(path: Path, lines: list[str], first_line: int, layout: Layout,
               error: type[DataError], *, by_row: bool = True) -> Rows:
     """The rows from lines[first_line:] (a file's lines, 0-based), in chunks of CHUNK_LINES."""
-    chunks = (("\n".join(lines[k:k + CHUNK_LINES]) + "\n", k + 1)
+    chunks = ((("\n".join(lines[k:k + CHUNK_LINES]) + "\n").encode(), k + 1)
               for k in range(first_line, len(lines), CHUNK_LINES))
     return read_rows(chunks, max(len(lines) - first_line, 0), layout, path, error,
                      by_row=by_row)
 
 
-def _file_chunks(path: Path, first_line: int) -> Iterator[tuple[str, int]]:
-    """(text of whole lines, 1-based line number of its first) from line ``first_line`` on;
+def _file_chunks(path: Path, first_line: int) -> Iterator[tuple[bytes, int]]:
+    """(bytes of whole lines, 1-based line number of its first) from line ``first_line`` on;
     a line break is "\\n", "\\r\\n" or "\\r" (as str.splitlines counts them)."""
     with open(path, "rb") as f:
         for _ in range(first_line):
@@ -82,24 +82,31 @@ def _file_chunks(path: Path, first_line: int) -> Iterator[tuple[str, int]]:
         for block in iter(lambda: f.read(CHUNK_BYTES), b""):
             block = carry + block
             cut = block.rfind(b"\n") + 1
-            carry = block[cut:]
             if cut:
-                text = _decode(block[:cut], at_start=line == 1)
-                yield text, line
-                line += text.count("\n")
+                chunk, carry = _breaks(block[:cut], at_start=line == 1), block[cut:]
+                yield chunk, line
+                line += chunk.count(b"\n")
+            else:
+                carry = block
         if carry:
-            yield _decode(carry, at_start=line == 1), line
+            yield _breaks(carry, at_start=line == 1), line
 
 
-def _decode(raw: bytes, *, at_start: bool) -> str:
+def _breaks(raw: bytes, *, at_start: bool) -> bytes:
+    """Line breaks as "\\n", a UTF-8 byte-order mark at the file's start dropped."""
+    if at_start and raw.startswith(b"\xef\xbb\xbf"):
+        raw = raw[3:]
+    return raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n") if b"\r" in raw else raw
+
+
+def _decode(raw: bytes) -> str:
     try:
-        text = raw.decode("utf-8-sig" if at_start else "utf-8")
+        return raw.decode("utf-8")
     except UnicodeDecodeError:
-        text = raw.decode("latin-1")  # as text_table.decode_text: older Windows exports
-    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
+        return raw.decode("latin-1")  # as text_table.decode_text: older Windows exports
 
 
-def read_rows(chunks: Iterable[tuple[str, int]], most: int, layout: Layout, path: Path,
+def read_rows(chunks: Iterable[tuple[bytes, int]], most: int, layout: Layout, path: Path,
               error: type[DataError], *, by_row: bool = True) -> Rows:
     """Every row of ``chunks`` ((text, 1-based line of its first line), at most ``most``
     rows in all), into one array filled in place. ``by_row=False``: a chunk that is not plain
@@ -127,7 +134,7 @@ def read_rows(chunks: Iterable[tuple[str, int]], most: int, layout: Layout, path
     return Rows(data[:k], line_of[:k], tuple(notes))
 
 
-def _marked_last(chunks: Iterable[tuple[str, int]]) -> Iterator[tuple[tuple[str, int], bool]]:
+def _marked_last(chunks: Iterable[tuple[bytes, int]]) -> Iterator[tuple[tuple[bytes, int], bool]]:
     """Each chunk that holds more than blank lines, and whether it is the last such."""
     held = None
     for chunk in chunks:
@@ -139,28 +146,28 @@ def _marked_last(chunks: Iterable[tuple[str, int]]) -> Iterator[tuple[tuple[str,
         yield held, True
 
 
-def _plain(text: str, layout: Layout) -> np.ndarray | None:
+def _plain(text: bytes, layout: Layout) -> np.ndarray | None:
     """The chunk's rows (one a line, every line a row) read by loadtxt, or None."""
     d = layout.delimiter
-    if d not in FAST_DELIMITERS or any(text.startswith(p) or f"\n{p}" in text
+    if d not in FAST_DELIMITERS or any(text.startswith(p.encode()) or b"\n" + p.encode() in text
                                        for p in layout.skip):
         return None
-    body = text.rstrip("\n")  # blank lines at the end: no rows
+    body = text.rstrip(b"\n")  # blank lines at the end: no rows
     try:
         data = _loadtxt(body, d)
     except ValueError:  # an empty cell (NaN) or anything else (row by row)
-        if d is None or "\n\n" in body or body.startswith("\n"):
+        if d is None or b"\n\n" in body or body.startswith(b"\n"):
             return None
         try:
-            data = _loadtxt(_EMPTY[d].sub("nan", body), d)
+            data = _loadtxt(_EMPTY[d].sub(b"nan", body), d)
         except ValueError:
             return None
-    lines = body.count("\n") + 1
+    lines = body.count(b"\n") + 1
     return data if data.shape == (lines, layout.n) else None  # else a blank line: row by row
 
 
-def _loadtxt(text: str, delimiter: str | None) -> np.ndarray:
-    return np.loadtxt(io.StringIO(text), delimiter=delimiter, dtype=float, ndmin=2,
+def _loadtxt(text: bytes, delimiter: str | None) -> np.ndarray:
+    return np.loadtxt(io.BytesIO(text), delimiter=delimiter, dtype=float, ndmin=2,
                       comments=None)
 
 
@@ -198,12 +205,12 @@ def _number(cell: str) -> float | None:
     return v if v == v else None  # a NaN spelt another way ("+nan"): not a missing value
 
 
-def _by_row(text: str, first: int, layout: Layout, path: Path, error: type[DataError], *,
+def _by_row(text: bytes, first: int, layout: Layout, path: Path, error: type[DataError], *,
             last: bool, after: int) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """A chunk row by row: blank lines and lines starting with layout.skip are no rows; a last
     line (``last`` chunk) with too few fields, after other rows, is dropped with a note."""
     n, notes = layout.n, []
-    body = [(i, ln) for i, ln in enumerate(text.split("\n"), start=first)
+    body = [(i, ln) for i, ln in enumerate(_decode(text).split("\n"), start=first)
             if ln.strip() and not ln.startswith(layout.skip)]
     values: list[float] = []
     lines: list[int] = []

@@ -86,16 +86,17 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     if coords.shape[1] != 3 * m:
         raise GroundTruthError(path, f"has {coords.shape[1]} coordinate columns for {m} markers "
                                f"(expected {3 * m})", "is MARKER_NAMES complete?")
-    far = np.isinf(coords) | (np.abs(np.nan_to_num(coords)) > MAX_MARKER_MM)
+    far = (coords > MAX_MARKER_MM) | (coords < -MAX_MARKER_MM)  # ±inf too; NaN (a gap) not
     if far.any():
         r, k = np.argwhere(far)[0]
         raise GroundTruthError(path, f"line {tab.line_of[r]}: marker {names[k // 3]} has "
                                f"{'XYZ'[k % 3]} = {coords[r, k]:g} mm, beyond any capture volume",
                                "the row is damaged: empty its cells (a gap)")
-    xyz = coords.reshape(-1, m, 3) * MM
+    t = _times(path, tab, time_col, frame_col, freq, coords.shape[0]).copy()
+    coords *= MM  # in place (as (N, 3M): a (N, M, 3) view would be copied to multiply)
+    xyz = coords.reshape(-1, m, 3)  # a view of the table's columns: no copy of a long session
     xyz[np.all(xyz == 0.0, axis=2)] = np.nan  # QTM writes gaps as zeros in some versions
     xyz[np.any(np.isnan(xyz), axis=2)] = np.nan
-    t = _times(path, tab, time_col, frame_col, freq, xyz.shape[0])
     notes = list(tab.notes)
     n_frames = keys.get("NO_OF_FRAMES", [None])[0]
     if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
