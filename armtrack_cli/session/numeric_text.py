@@ -1,7 +1,7 @@
 """The one reader of a delimited numeric table's body (issue 15): streamed in chunks of whole
 lines, from the file (file_rows) or from lines already in memory (line_rows), so that a long
 export is never held as text (a 60-minute Qualisys export held as lines took ~150 MB; this
-holds its numbers and one chunk). Each chunk is read at C speed by numpy's loadtxt when it is
+holds its numbers and a chunk or two). Each chunk is read at C speed by numpy's loadtxt when it is
 plain numbers (nan/inf spelt out, or an empty cell: NaN); anything else (an NA spelling, a
 blank or comment line, a trailing delimiter, a ragged or truncated row, text) is read row by
 row, which takes NA spellings as missing, drops a truncated last line with a note and names
@@ -20,8 +20,8 @@ import numpy as np
 
 from armtrack_cli.core.errors import DataError
 
-CHUNK_BYTES = 1 << 20  # 1 MB of text a chunk: ~10,000 rows of an IMU export
-CHUNK_LINES = 10_000  # the same for lines already in memory
+CHUNK_BYTES = 1 << 22  # 4 MB of text a chunk (~40,000 rows of an IMU export): a few MB held
+CHUNK_LINES = 40_000  # the same for lines already in memory
 MISSING_TOKENS = frozenset({"", "nan", "na", "n/a", "null", "-nan"})
 FAST_DELIMITERS = ("\t", ",", ";", None)  # what loadtxt splits as the row-by-row parse does
 SEPARATOR = {"\t": "tab", ",": "comma", ";": "semicolon", " ": "space", None: "space"}
@@ -56,24 +56,22 @@ class Layout:
 def file_rows(path: Path, first_line: int, layout: Layout, error: type[DataError], *,
               by_row: bool = True) -> Rows:
     """The rows from line ``first_line`` (0-based) of the file to its end, streamed."""
-    with open(path, "rb") as f:  # an upper bound (a CR LF counts twice): np.empty's pages
-        breaks = sum(b.count(b"\n") + b.count(b"\r")  # beyond the rows are never touched
-                     for b in iter(lambda: f.read(CHUNK_BYTES), b""))
-    return read_rows(_file_chunks(path, first_line), max(breaks + 1 - first_line, 0), layout,
-                     path, error, by_row=by_row)
+    most = Path(path).stat().st_size // layout.n + 1  # a row takes n bytes at least; the
+    #                 pages of np.empty beyond the rows read are never touched, never resident
+    return read_rows(_file_chunks(path, first_line), most, layout, path, error, by_row=by_row)
 
 
 def line_rows(path: Path, lines: list[str], first_line: int, layout: Layout,
               error: type[DataError], *, by_row: bool = True) -> Rows:
     """The rows from lines[first_line:] (a file's lines, 0-based), in chunks of CHUNK_LINES."""
-    chunks = ((("\n".join(lines[k:k + CHUNK_LINES]) + "\n").encode(), k + 1)
-              for k in range(first_line, len(lines), CHUNK_LINES))
+    chunks = ((("\n".join(lines[k:k + CHUNK_LINES]) + "\n").encode(), k + 1,
+               len(lines[k:k + CHUNK_LINES])) for k in range(first_line, len(lines), CHUNK_LINES))
     return read_rows(chunks, max(len(lines) - first_line, 0), layout, path, error,
                      by_row=by_row)
 
 
-def _file_chunks(path: Path, first_line: int) -> Iterator[tuple[bytes, int]]:
-    """(bytes of whole lines, 1-based line number of its first) from line ``first_line`` on;
+def _file_chunks(path: Path, first_line: int) -> Iterator[tuple[bytes, int, int]]:
+    """(bytes of whole lines, 1-based line number of its first, lines) from line ``first_line`` on;
     a line break is "\\n", "\\r\\n" or "\\r" (as str.splitlines counts them)."""
     with open(path, "rb") as f:
         for _ in range(first_line):
@@ -84,12 +82,14 @@ def _file_chunks(path: Path, first_line: int) -> Iterator[tuple[bytes, int]]:
             cut = block.rfind(b"\n") + 1
             if cut:
                 chunk, carry = _breaks(block[:cut], at_start=line == 1), block[cut:]
-                yield chunk, line
-                line += chunk.count(b"\n")
+                lines = chunk.count(b"\n")
+                yield chunk, line, lines
+                line += lines
             else:
                 carry = block
         if carry:
-            yield _breaks(carry, at_start=line == 1), line
+            chunk = _breaks(carry, at_start=line == 1)
+            yield chunk, line, chunk.count(b"\n") + (not chunk.endswith(b"\n"))
 
 
 def _breaks(raw: bytes, *, at_start: bool) -> bytes:
@@ -106,26 +106,26 @@ def _decode(raw: bytes) -> str:
         return raw.decode("latin-1")  # as text_table.decode_text: older Windows exports
 
 
-def read_rows(chunks: Iterable[tuple[bytes, int]], most: int, layout: Layout, path: Path,
+def read_rows(chunks: Iterable[tuple[bytes, int, int]], most: int, layout: Layout, path: Path,
               error: type[DataError], *, by_row: bool = True) -> Rows:
-    """Every row of ``chunks`` ((text, 1-based line of its first line), at most ``most``
+    """Every row of ``chunks`` ((text, 1-based line of its first line, lines), at most ``most``
     rows in all), into one array filled in place. ``by_row=False``: a chunk that is not plain
     numbers raises Irregular instead of being read row by row."""
     data = np.empty((most, layout.n))
     line_of = np.empty(most, dtype=np.int64)
     notes: list[str] = []
     k = 0
-    for (text, first), last in _marked_last(chunks):
-        got = _plain(text, layout)
+    for (text, first, lines), last in _marked_last(chunks):
+        got = _plain(text, lines, layout)
         if got is None:
             if not by_row:
                 raise Irregular
-            got, lines, note = _by_row(text, first, layout, path, error, last=last, after=k)
+            got, at, note = _by_row(text, first, layout, path, error, last=last, after=k)
             notes += note
         else:
-            lines = np.arange(first, first + len(got))
+            at = np.arange(first, first + len(got))
         data[k:k + len(got)] = got
-        line_of[k:k + len(got)] = lines
+        line_of[k:k + len(got)] = at
         k += len(got)
     if not k:
         if not by_row:
@@ -134,11 +134,12 @@ def read_rows(chunks: Iterable[tuple[bytes, int]], most: int, layout: Layout, pa
     return Rows(data[:k], line_of[:k], tuple(notes))
 
 
-def _marked_last(chunks: Iterable[tuple[bytes, int]]) -> Iterator[tuple[tuple[bytes, int], bool]]:
+def _marked_last(chunks: Iterable[tuple[bytes, int, int]]
+                 ) -> Iterator[tuple[tuple[bytes, int, int], bool]]:
     """Each chunk that holds more than blank lines, and whether it is the last such."""
     held = None
     for chunk in chunks:
-        if chunk[0].strip():
+        if chunk[0] and not chunk[0].isspace():
             if held is not None:
                 yield held, False
             held = chunk
@@ -146,23 +147,25 @@ def _marked_last(chunks: Iterable[tuple[bytes, int]]) -> Iterator[tuple[tuple[by
         yield held, True
 
 
-def _plain(text: bytes, layout: Layout) -> np.ndarray | None:
-    """The chunk's rows (one a line, every line a row) read by loadtxt, or None."""
+def _plain(text: bytes, lines: int, layout: Layout) -> np.ndarray | None:
+    """The chunk's rows (one a line, every line of its ``lines`` a row) by loadtxt, or None."""
     d = layout.delimiter
     if d not in FAST_DELIMITERS or any(text.startswith(p.encode()) or b"\n" + p.encode() in text
                                        for p in layout.skip):
         return None
-    body = text.rstrip(b"\n")  # blank lines at the end: no rows
+    body = text
+    if text.endswith(b"\n\n"):  # blank lines at the end: no rows
+        body = text.rstrip(b"\n")
+        lines = body.count(b"\n") + 1
     try:
         data = _loadtxt(body, d)
     except ValueError:  # an empty cell (NaN) or anything else (row by row)
         if d is None or b"\n\n" in body or body.startswith(b"\n"):
             return None
         try:
-            data = _loadtxt(_EMPTY[d].sub(b"nan", body), d)
+            data = _loadtxt(_EMPTY[d].sub(b"nan", body.rstrip(b"\n")), d)
         except ValueError:
             return None
-    lines = body.count(b"\n") + 1
     return data if data.shape == (lines, layout.n) else None  # else a blank line: row by row
 
 
