@@ -193,8 +193,11 @@ def _rows(tmp_path, text: str, n: int = 3, delimiter="\t"):
     return numeric_text.file_rows(p, 0, layout, DataError)
 
 
-def test_an_empty_cell_is_nan_and_lines_are_counted_across_chunks(tmp_path, monkeypatch):
+@pytest.mark.parametrize("reserve", [numeric_text.RESERVE_BYTES, 0])  # 0: the rows counted
+def test_an_empty_cell_is_nan_and_lines_are_counted_across_chunks(tmp_path, monkeypatch,
+                                                                  reserve):
     monkeypatch.setattr(numeric_text, "CHUNK_BYTES", 64)
+    monkeypatch.setattr(numeric_text, "RESERVE_BYTES", reserve)
     body = "".join(f"{k}\t{k * 2}\t{'' if k % 7 == 3 else k * 3}\n" for k in range(100))
     got = _rows(tmp_path, body)
     want = np.array([[k, 2 * k, np.nan if k % 7 == 3 else 3 * k] for k in range(100)], float)

@@ -22,6 +22,7 @@ from armtrack_cli.core.errors import DataError
 
 CHUNK_BYTES = 1 << 22  # 4 MB of text a chunk (~40,000 rows of an IMU export): a few MB held
 CHUNK_LINES = 40_000  # the same for lines already in memory
+RESERVE_BYTES = 1 << 30  # np.empty's pages past the rows read are never touched nor resident
 MISSING_TOKENS = frozenset({"", "nan", "na", "n/a", "null", "-nan"})
 FAST_DELIMITERS = ("\t", ",", ";", None)  # what loadtxt splits as the row-by-row parse does
 SEPARATOR = {"\t": "tab", ",": "comma", ";": "semicolon", " ": "space", None: "space"}
@@ -56,8 +57,11 @@ class Layout:
 def file_rows(path: Path, first_line: int, layout: Layout, error: type[DataError], *,
               by_row: bool = True) -> Rows:
     """The rows from line ``first_line`` (0-based) of the file to its end, streamed."""
-    most = Path(path).stat().st_size // layout.n + 1  # a row takes n bytes at least; the
-    #                 pages of np.empty beyond the rows read are never touched, never resident
+    most = Path(path).stat().st_size // max(layout.n, 2) + 1  # a row takes n bytes at least
+    if most * (layout.n + 1) * 8 > RESERVE_BYTES:  # beyond any session: the rows counted
+        with open(path, "rb") as f:
+            blocks = iter(lambda: f.read(CHUNK_BYTES), b"")
+            most = sum(b.count(b"\n") + b.count(b"\r") for b in blocks) + 1
     return read_rows(_file_chunks(path, first_line), most, layout, path, error, by_row=by_row)
 
 
