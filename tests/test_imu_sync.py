@@ -159,3 +159,26 @@ def test_coarse_to_fine_grid_finds_the_full_grids_offset(offset_s, task, seed, m
     monkeypatch.setattr(imu_sync, "COARSE", 1)
     full = estimate_imu_offset(p, search_s=1.0)
     assert fast == full
+
+
+@pytest.mark.parametrize("window, deriv", [(5, 0), (15, 0), (15, 1), (31, 1), (7, 2)])
+def test_savgol_coefficients_are_scipys(window, deriv):
+    from scipy.signal import savgol_coeffs as scipy_coeffs
+
+    from armtrack_cli.fuse.imu_sync import savgol_coeffs
+
+    want = scipy_coeffs(window, 3, deriv=deriv, delta=1 / 30, use="dot")
+    assert np.allclose(savgol_coeffs(window, deriv, 1 / 30), want, rtol=1e-12, atol=1e-12)
+
+
+def test_hermite_curve_is_scipys():
+    from scipy.interpolate import CubicHermiteSpline
+
+    from armtrack_cli.fuse.imu_sync import hermite
+
+    rng = np.random.default_rng(5)
+    t = np.cumsum(rng.uniform(0.005, 0.015, 400))
+    y, dydt = rng.standard_normal((400, 3)), rng.standard_normal((400, 3))
+    x = np.r_[rng.uniform(t[0] - 0.02, t[-1] + 0.02, 2000), t]  # inside, at the knots, beyond
+    want = CubicHermiteSpline(t, y, dydt, axis=0)(x)
+    assert np.allclose(hermite(t, y, dydt, x), want, rtol=1e-12, atol=1e-12)

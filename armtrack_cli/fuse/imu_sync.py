@@ -32,10 +32,13 @@ gives no IMU velocity. Measured in docs/validation-sync.md.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from armtrack_cli.core.bounded_min import bounded_min
+from armtrack_cli.core.grid_search import coarse_to_fine
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
     RIDGE,
@@ -82,12 +85,41 @@ class SyncProblem:
     arm: models.Arm | None
 
 
+def savgol_coeffs(window: int, deriv: int, dt: float) -> np.ndarray:
+    """The weights (window,) of a cubic Savitzky–Golay filter's ``deriv``-th derivative at the
+    window's centre, applied as a dot product with the samples in order (scipy.signal's
+    savgol_coeffs(window, 3, deriv, delta=dt, use="dot"), without importing scipy.signal, over
+    a second), as scipy finds them: the minimum-norm c with Σ_i c_i x_i^k = deriv! / dt^deriv
+    for k = deriv and 0 for the other powers k ≤ 3, x_i the window's offsets (Savitzky &
+    Golay 1964)."""
+    h = window // 2
+    A = np.arange(-h, window - h, dtype=float) ** np.arange(4)[:, None]  # (4, window)
+    y = np.zeros(4)
+    y[deriv] = math.factorial(deriv) / dt**deriv
+    return np.linalg.lstsq(A, y, rcond=None)[0]
+
+
+def hermite(t: np.ndarray, y: np.ndarray, dydt: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The cubic Hermite curve through (t (M,), y (M, d)) with slopes dydt (M, d), at x (n,)
+    (scipy's CubicHermiteSpline(t, y, dydt)(x), extrapolated from the end intervals, without
+    its (4, M − 1, d) coefficient table): with s = x − t_j in interval j of width h and the
+    secant slope m = (y_{j+1} − y_j)/h, y_j + s (y'_j + s (c2 + s c3)), c2 = (3m − 2y'_j −
+    y'_{j+1})/h, c3 = (y'_j + y'_{j+1} − 2m)/h², each in scipy's order of operations."""
+    j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 2)
+    h = (t[j + 1] - t[j])[:, None]
+    m = (y[j + 1] - y[j]) / h
+    d0, d1 = dydt[j], dydt[j + 1]
+    c3 = (d0 + d1 - 2 * m) / h  # scipy's t, then c3 = t / h and c2 = (m − y'_j)/h − t
+    c2 = (m - d0) / h - c3
+    c3 /= h
+    s = (x - t[j])[:, None]
+    return ((c3 * s + c2) * s + d0) * s + y[j]
+
+
 def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
     """Cubic Savitzky–Golay along axis 0 (odd ``window``); NaN wherever the window holds a NaN
     or runs off either end."""
-    from scipy.signal import savgol_coeffs
-
-    c = savgol_coeffs(window, 3, deriv=deriv, delta=dt, use="dot")
+    c = savgol_coeffs(window, deriv, dt)
     h = window // 2
     out = np.full(x.shape, np.nan)
     if x.shape[0] < window:
@@ -106,7 +138,8 @@ class _Prepared:
     J: np.ndarray  # (n, 2, 3) px/m
     drift: SplineRows  # (n, m) the drift's spline basis at the frames
     rint: np.ndarray  # (M, 3, 3) s: ∫R_WB dt on the IMU's clock (a bias in B's velocity)
-    v_imu: object  # t -> (…, 3) m/s, ∫ a_W dt on the IMU's clock: cubic Hermite (dv/dt = a_W)
+    v_imu: np.ndarray  # (M, 3) m/s, ∫ a_W dt at the IMU's samples (trapezoidal); between
+    #                    them the cubic Hermite curve with dv/dt = a_W (``hermite``)
     dt: float  # frame period, s
     window: int
 
@@ -114,8 +147,6 @@ class _Prepared:
 def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Prepared:
     """The fit's parts at δ; given ``like`` (another δ's), only the Jacobians (the rays'
     depths move with δ), the rest shared with it: one copy of the per-sample arrays."""
-    from scipy.interpolate import CubicHermiteSpline  # imported where used (issue 15)
-
     J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
     if like is not None:
         return replace(like, J=J)
@@ -126,7 +157,7 @@ def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Pr
                                                    * np.diff(p.t_imu)[:, None], axis=0)])
     return _Prepared(_savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 1, dt), J, drift,
                      rotation_integral(p.t_imu, p.q_WB),
-                     CubicHermiteSpline(p.t_imu, v_imu, p.a_W, axis=0), dt, window)
+                     v_imu, dt, window)
 
 
 def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
@@ -230,7 +261,7 @@ def predicted(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
     t = p.t_frames - delta
     j = np.clip(np.searchsorted(p.t_imu, t, side="right"), 1, p.t_imu.size - 1)
     t0, t1 = p.t_imu[j - 1], p.t_imu[j]
-    v = pre.v_imu(t)
+    v = hermite(p.t_imu, pre.v_imu, p.a_W, t)
     v[(t < p.t_imu[0]) | (t > p.t_imu[-1]) | (t1 - t0 > GAP_S)] = np.nan
     return _savgol(np.einsum("kij,kj->ki", pre.J, v), pre.window, 0, pre.dt)
 
@@ -347,32 +378,22 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
 def _grid_costs(grid: np.ndarray, p: SyncProblem, pre: _Prepared, n_img: int) -> np.ndarray:
     """The cost at every COARSE-th δ of the grid, then at each δ within COARSE − 1 of the
     best of those (coarse to fine: the basin is many frames wide); inf where not evaluated."""
-    costs = np.full(grid.size, np.inf)
     cache: dict = {}  # the grid's normal equations: the refinements keep their own
-    coarse = np.unique(np.r_[np.arange(0, grid.size, COARSE), grid.size - 1])
-    for i in coarse:
-        costs[i] = cost(grid[i], p, pre, n_img, cache)
-    if np.isfinite(costs).any():
-        best = int(np.argmin(costs))
-        for i in range(max(best - COARSE + 1, 0), min(best + COARSE, grid.size)):
-            if i not in coarse:
-                costs[i] = cost(grid[i], p, pre, n_img, cache)
-    return costs
+    return coarse_to_fine(grid.size, lambda i: cost(grid[i], p, pre, n_img, cache),
+                          every=COARSE, radius=COARSE - 1, with_last=True)
 
 
 def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
             ) -> tuple[float, float]:
     """The cost's minimum within d0 ± REFINE_FRAMES periods, on the frames all of it scores:
     (δ, cost)."""
-    from scipy.optimize import minimize_scalar
-
     lo, hi = d0 - REFINE_FRAMES * step, d0 + REFINE_FRAMES * step
     frames = _mask(p, pre, lo)[1] & _mask(p, pre, d0)[1] & _mask(p, pre, hi)[1]
     cache: dict = {}
     c0 = cost(d0, p, pre, n_img, cache, frames)
-    res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
-                          args=(p, pre, n_img, cache, frames), options={"xatol": 1e-5})
-    return (float(res.x), float(res.fun)) if res.fun <= c0 else (d0, c0)
+    x, fun = bounded_min(lambda d: cost(d, p, pre, n_img, cache, frames), lo, hi,
+                         xatol=1e-5)  # scipy's bounded minimize_scalar, step for step
+    return (float(x), float(fun)) if fun <= c0 else (d0, c0)
 
 
 def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
