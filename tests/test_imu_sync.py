@@ -165,7 +165,7 @@ def test_coarse_to_fine_grid_finds_the_full_grids_offset(offset_s, task, seed, m
 def test_savgol_coefficients_are_scipys(window, deriv):
     from scipy.signal import savgol_coeffs as scipy_coeffs
 
-    from armtrack_cli.fuse.imu_sync import savgol_coeffs
+    from armtrack_cli.core.curves import savgol_coeffs
 
     want = scipy_coeffs(window, 3, deriv=deriv, delta=1 / 30, use="dot")
     assert np.allclose(savgol_coeffs(window, deriv, 1 / 30), want, rtol=1e-12, atol=1e-12)
@@ -174,7 +174,7 @@ def test_savgol_coefficients_are_scipys(window, deriv):
 def test_hermite_curve_is_scipys():
     from scipy.interpolate import CubicHermiteSpline
 
-    from armtrack_cli.fuse.imu_sync import hermite
+    from armtrack_cli.core.curves import hermite
 
     rng = np.random.default_rng(5)
     t = np.cumsum(rng.uniform(0.005, 0.015, 400))
@@ -182,3 +182,21 @@ def test_hermite_curve_is_scipys():
     x = np.r_[rng.uniform(t[0] - 0.02, t[-1] + 0.02, 2000), t]  # inside, at the knots, beyond
     want = CubicHermiteSpline(t, y, dydt, axis=0)(x)
     assert np.allclose(hermite(t, y, dydt, x), want, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("span_s", [0.5, 61.0, 600.0])
+def test_bspline_rows_are_scipys_design_matrix(span_s):
+    """The drift's quartic basis (KNOT_S apart) at frame times, the ends included."""
+    from scipy.interpolate import BSpline
+
+    from armtrack_cli.core.curves import bspline_rows
+
+    t = np.arange(0.0, span_s, 1 / 30) + 0.013
+    inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / 6.0)) + 1))
+    knots = np.r_[[inner[0]] * 4, inner, [inner[-1]] * 4]
+    B = BSpline.design_matrix(t, knots, 4).toarray()
+    start, w = bspline_rows(t, knots, 4)
+    mine = np.zeros_like(B)
+    for i in range(5):
+        mine[np.arange(t.size), start + i] = w[:, i]
+    assert np.allclose(mine, B, rtol=0, atol=1e-14)

@@ -32,12 +32,12 @@ gives no IMU velocity. Measured in docs/validation-sync.md.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from armtrack_cli.core.bounded_min import bounded_min
+from armtrack_cli.core.curves import bspline_rows, hermite, savgol_coeffs
 from armtrack_cli.core.grid_search import coarse_to_fine
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
@@ -83,37 +83,6 @@ class SyncProblem:
     uv: np.ndarray  # (n, 2) px, NaN = no detection
     proj: models.Projection
     arm: models.Arm | None
-
-
-def savgol_coeffs(window: int, deriv: int, dt: float) -> np.ndarray:
-    """The weights (window,) of a cubic Savitzky–Golay filter's ``deriv``-th derivative at the
-    window's centre, applied as a dot product with the samples in order (scipy.signal's
-    savgol_coeffs(window, 3, deriv, delta=dt, use="dot"), without importing scipy.signal, over
-    a second), as scipy finds them: the minimum-norm c with Σ_i c_i x_i^k = deriv! / dt^deriv
-    for k = deriv and 0 for the other powers k ≤ 3, x_i the window's offsets (Savitzky &
-    Golay 1964)."""
-    h = window // 2
-    A = np.arange(-h, window - h, dtype=float) ** np.arange(4)[:, None]  # (4, window)
-    y = np.zeros(4)
-    y[deriv] = math.factorial(deriv) / dt**deriv
-    return np.linalg.lstsq(A, y, rcond=None)[0]
-
-
-def hermite(t: np.ndarray, y: np.ndarray, dydt: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """The cubic Hermite curve through (t (M,), y (M, d)) with slopes dydt (M, d), at x (n,)
-    (scipy's CubicHermiteSpline(t, y, dydt)(x), extrapolated from the end intervals, without
-    its (4, M − 1, d) coefficient table): with s = x − t_j in interval j of width h and the
-    secant slope m = (y_{j+1} − y_j)/h, y_j + s (y'_j + s (c2 + s c3)), c2 = (3m − 2y'_j −
-    y'_{j+1})/h, c3 = (y'_j + y'_{j+1} − 2m)/h², each in scipy's order of operations."""
-    j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 2)
-    h = (t[j + 1] - t[j])[:, None]
-    m = (y[j + 1] - y[j]) / h
-    d0, d1 = dydt[j], dydt[j + 1]
-    c3 = (d0 + d1 - 2 * m) / h  # scipy's t, then c3 = t / h and c2 = (m − y'_j)/h − t
-    c2 = (m - d0) / h - c3
-    c3 /= h
-    s = (x - t[j])[:, None]
-    return ((c3 * s + c2) * s + d0) * s + y[j]
 
 
 def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
@@ -236,15 +205,13 @@ def _bridge(x: np.ndarray, most: int) -> np.ndarray:
 def _spline_basis(t: np.ndarray) -> SplineRows:
     """(n, m) quartic B-splines, knots KNOT_S apart over t: the integrals of cubic splines
     (plus a constant), i.e. the velocity drift of a smoothly varying acceleration error."""
-    from scipy.interpolate import BSpline
-
     k = DRIFT_DEGREE
     inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / KNOT_S)) + 1))
     knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
     # k + 1 non-zeros a row, kept as such (fuse/drift_ls.py): dense, a 60-minute session's
     # basis would be 1.6 GB
-    return SplineRows.from_csr(
-        BSpline.design_matrix(np.clip(t, inner[0], inner[-1]), knots, k).tocsr(), k + 1)
+    start, w = bspline_rows(np.clip(t, inner[0], inner[-1]), knots, k)
+    return SplineRows(start, w, knots.size - k - 1)
 
 
 def _fill(x: np.ndarray) -> np.ndarray:
