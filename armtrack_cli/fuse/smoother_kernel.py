@@ -81,9 +81,47 @@ def _rts_step(x, P, F, b, Q, xs, Ps):
 
 @njit(cache=True)
 def _work(d):
-    """Work arrays of one pass: (vector, vector, matrix, matrix, matrix, pivots)."""
+    """Work arrays of one pass: (vector, vector, matrix, matrix, matrix, pivots, F's non-zero
+    columns row by row, their counts)."""
     return (np.empty(d), np.empty(d), np.empty((d, d)), np.empty((d, d)), np.empty((d, d)),
-            np.empty(d, np.int64))
+            np.empty(d, np.int64), np.empty((d, d), np.int64), np.empty(d, np.int64))
+
+
+@njit(cache=True)
+def _pattern(F, nz, cnt):
+    """Row i of F's non-zero columns, in order, into nz[i, :cnt[i]] (the model's F is the
+    identity plus a few 3 × 3 blocks: a product skipping its zeros adds the same non-zero
+    terms in the same order, so its result is the dense loop's)."""
+    d = F.shape[0]
+    for i in range(d):
+        c = 0
+        for k in range(d):
+            if F[i, k] != 0.0:
+                nz[i, c] = k
+                c += 1
+        cnt[i] = c
+
+
+@njit(cache=True)
+def _f_products(F, P, Q, FP, out, nz, cnt):
+    """FP ← F P and out ← F P Fᵀ + Q, over F's non-zeros (_pattern)."""
+    d = F.shape[0]
+    _pattern(F, nz, cnt)
+    for i in range(d):
+        for j in range(d):
+            FP[i, j] = 0.0
+        for c in range(cnt[i]):
+            k = nz[i, c]
+            a = F[i, k]
+            for j in range(d):
+                FP[i, j] += a * P[k, j]
+    for i in range(d):
+        for j in range(d):
+            acc = 0.0
+            for c in range(cnt[j]):
+                k = nz[j, c]
+                acc += FP[i, k] * F[j, k]
+            out[i, j] = acc + Q[i, j]
 
 
 @njit(cache=True)
@@ -108,23 +146,12 @@ def _mat_vec(P, h, out):
 @njit(cache=True)
 def _predict_into(x, P, F, b, Q, w):
     """x ← F x + b, P ← F P Fᵀ + Q in place (w: _work)."""
-    v, _, FP, _, _, _ = w
+    v, FP = w[0], w[2]
     d = x.size
     _mat_vec(F, x, v)
     for i in range(d):
         x[i] = v[i] + b[i]
-    for i in range(d):
-        for j in range(d):
-            acc = 0.0
-            for k in range(d):
-                acc += F[i, k] * P[k, j]
-            FP[i, j] = acc
-    for i in range(d):
-        for j in range(d):
-            acc = 0.0
-            for k in range(d):
-                acc += FP[i, k] * F[j, k]
-            P[i, j] = acc + Q[i, j]
+    _f_products(F, P, Q, FP, P, w[6], w[7])  # F P is done before P is overwritten
 
 
 @njit(cache=True)
@@ -204,34 +231,24 @@ def _solve_into(A, B, piv):
                 A[i, j] -= f * A[c, j]
             for j in range(B.shape[1]):
                 B[i, j] -= f * B[c, j]
-    for c in range(d - 1, -1, -1):
+    for c in range(d - 1, -1, -1):  # row by row, the columns innermost (contiguous)
+        for k in range(c + 1, d):
+            a = A[c, k]
+            for j in range(B.shape[1]):
+                B[c, j] -= a * B[k, j]
         for j in range(B.shape[1]):
-            acc = B[c, j]
-            for k in range(c + 1, d):
-                acc -= A[c, k] * B[k, j]
-            B[c, j] = acc / A[c, c]
+            B[c, j] /= A[c, c]
 
 
 @njit(cache=True)
 def _rts_into(x, P, F, b, Q, xs, Ps, w):
     """_rts_step in place on frame k's (x, P) (w: _work)."""
-    v, dx, FP, Pp, G, piv = w
+    v, dx, FP, Pp, G, piv = w[0], w[1], w[2], w[3], w[4], w[5]
     d = x.size
     _mat_vec(F, x, v)
     for i in range(d):
         dx[i] = xs[i] - (v[i] + b[i])  # x^s_{k+1} − x⁻
-    for i in range(d):
-        for j in range(d):
-            acc = 0.0
-            for k in range(d):
-                acc += F[i, k] * P[k, j]
-            FP[i, j] = acc
-    for i in range(d):
-        for j in range(d):
-            acc = 0.0
-            for k in range(d):
-                acc += FP[i, k] * F[j, k]
-            Pp[i, j] = acc + Q[i, j]
+    _f_products(F, P, Q, FP, Pp, w[6], w[7])
     for i in range(d):  # P^s_{k+1} − P⁻, before the solve overwrites P⁻
         for j in range(d):
             G[i, j] = Ps[i, j] - Pp[i, j]
@@ -241,18 +258,25 @@ def _rts_into(x, P, F, b, Q, xs, Ps, w):
         for k in range(d):
             acc += FP[k, i] * dx[k]
         x[i] += acc
-    for i in range(d):  # P^s = P + gain (P^s_{k+1} − P⁻) gainᵀ; gain (P^s_{k+1} − P⁻) into Pp
-        for j in range(d):
-            acc = 0.0
-            for k in range(d):
-                acc += FP[k, i] * G[k, j]
-            Pp[i, j] = acc
+    # P^s = P + gain (P^s_{k+1} − P⁻) gainᵀ: gain (P^s_{k+1} − P⁻) into Pp, then its rows
+    # times gainᵀ (= FP) added to P's; each product row by row with the columns innermost
+    # (contiguous, so the compiler runs several columns at once)
     for i in range(d):
         for j in range(d):
-            acc = 0.0
-            for k in range(d):
-                acc += Pp[i, k] * FP[k, j]
-            P[i, j] += acc
+            Pp[i, j] = 0.0
+        for k in range(d):
+            a = FP[k, i]
+            for j in range(d):
+                Pp[i, j] += a * G[k, j]
+    for i in range(d):
+        for j in range(d):
+            v[j] = 0.0
+        for k in range(d):
+            a = Pp[i, k]
+            for j in range(d):
+                v[j] += a * FP[k, j]
+        for j in range(d):
+            P[i, j] += v[j]
     _symmetrise(P)
 
 
