@@ -200,3 +200,21 @@ def test_bspline_rows_are_scipys_design_matrix(span_s):
     for i in range(5):
         mine[np.arange(t.size), start + i] = w[:, i]
     assert np.allclose(mine, B, rtol=0, atol=1e-14)
+
+
+def test_the_offset_check_loads_no_scipy_signal_interpolate_or_optimize(tmp_path):
+    """Its Savitzky–Golay weights, Hermite curve, B-spline rows, grid and bounded search are
+    numpy (core/curves.py, core/grid_search.py, core/bounded_min.py): estimating an offset in
+    a fresh process imports none of those libraries (issue 15: over a second)."""
+    import pickle
+    import subprocess
+    import sys
+
+    (tmp_path / "p.pkl").write_bytes(pickle.dumps(case(0.2, duration=12.0)))
+    code = ("import pickle, sys; from armtrack_cli.fuse.imu_sync import estimate_imu_offset; "
+            f"r = estimate_imu_offset(pickle.load(open({str(tmp_path / 'p.pkl')!r}, 'rb')), "
+            "search_s=0.5); print(round(r.estimate_s, 2), ' '.join(m for m in ('scipy.signal', "
+            "'scipy.interpolate', 'scipy.optimize') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    estimate, *loaded = out.stdout.split()
+    assert abs(float(estimate) - 0.2) < 0.02 and loaded == []
