@@ -17,7 +17,6 @@ geometry of the arm constraint against the recording, each measured apart from t
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
@@ -76,48 +75,6 @@ def geometry(truth_npz: Path) -> dict:
                L1=np.percentile(np.linalg.norm(E - S, axis=1), [5, 95]) * 100,
                moves=float(np.linalg.norm(S - S.mean(0), axis=1).max() * 100))
     return out
-
-
-def walk_rates(truths: list[Path], lag_s: float = 1.0) -> tuple[float, float]:
-    """The drifting arm's random-walk rates (m/√s) measured on recordings: the median over
-    trials of the RMS change of the shoulder point (per axis) and of |E − S| over lag_s,
-    divided by √lag_s (a random walk's increments grow as √lag). validation/from_mocap.py
-    takes them from the trials other than the one scored."""
-    sh, ln = [], []
-    for path in truths:
-        tr = np.load(path)
-        S, E, t = tr["shoulder"], tr["elbow"], tr["t"]
-        k = int(round(lag_s / np.median(np.diff(t))))
-        L = np.linalg.norm(E - S, axis=1)
-        sh.append(np.sqrt(np.mean((S[k:] - S[:-k]) ** 2) / lag_s))
-        ln.append(np.sqrt(np.mean((L[k:] - L[:-k]) ** 2) / lag_s))
-    return float(np.median(sh)), float(np.median(ln))
-
-
-def side_sign(truth_npz: Path) -> float:
-    """−1 for a left arm, +1 for a right one (the session's [session] side, beside OUT.truth.npz):
-    W's x is across the subject, so an anatomical offset along it changes sign with the side."""
-    toml = truth_npz.parent / truth_npz.name.removesuffix(".truth.npz") / "session.toml"
-    return -1.0 if re.search(r'^side = "left"', toml.read_text(), re.M) else 1.0
-
-
-def arm_priors(truths: list[Path]) -> tuple[float, ...]:
-    """Where the sphere the elbow turns about lies from the declared arm (the shoulder point's
-    mean, |E − S|'s median), measured on recordings: for each trial the hindsight sphere's
-    centre less the declared shoulder (x as for a right arm) and its radius less the declared
-    L1. Returns (SD per axis of the centre's offset about its mean, SD of the radius', mean
-    offset x (right arm), y, z, mean radius offset), m: the drifting arm's prior is centred on
-    the declared arm plus the mean offset, as wide as the trials spread about it.
-    validation/from_mocap.py takes them from the trials other than the one scored."""
-    dc, dr = [], []
-    for path in truths:
-        tr = np.load(path)
-        centre, radius = sphere_fit(tr["frame_elbow"])
-        dc.append((centre - tr["arm"][:3]) * [side_sign(path), 1.0, 1.0])
-        dr.append(radius - tr["arm"][3])
-    mc, mr = np.mean(dc, axis=0), float(np.mean(dr))
-    return (float(np.sqrt(np.mean(np.square(np.array(dc) - mc)))),
-            float(np.sqrt(np.mean(np.square(np.array(dr) - mr)))), *map(float, mc), mr)
 
 
 STILL_M_S = 0.02  # "the hand rests" for the error split: true wrist speed below 2 cm/s
@@ -260,7 +217,7 @@ def where_row(name: str, w: dict, truth_runs: list[float]) -> str:
 def rates_line(rates: list[tuple[float, ...]]) -> str:
     """The drifting arm's settings used, each trial's from the other trials (walk_rates,
     arm_priors)."""
-    sh, ln, psh, pln, dx, dy, dz, dl = np.array(rates).T * 100
+    sh, ln, psh, pln, dx, dy, dz, dl, rest = np.array(rates).T * 100
     return (f"The drifting arm's settings, each trial's measured on the other six recordings: "
             f"random walks (median over trials of the RMS change over 1 s, per √s) of the "
             f"shoulder {sh.min():.2f}-{sh.max():.2f} cm/√s per axis and of the upper arm's length "
@@ -272,6 +229,9 @@ def rates_line(rates: list[tuple[float, ...]]) -> str:
             f"{dl.max():+.1f} cm (the elbow turns about a point behind and below the shoulder "
             f"landmark, on a wider sphere); its SDs, the trials' spread about that mean, "
             f"{psh.min():.1f}-{psh.max():.1f} cm per axis and {pln.min():.1f}-{pln.max():.1f} cm. "
+            f"The rest update's SD, the resting hand's velocity (RMS per axis where the "
+            f"wrist is slower than {STILL_M_S * 100:.0f} cm/s, median over trials): "
+            f"{rest.min():.2f}-{rest.max():.2f} cm/s. "
             f"The defaults (`shoulder_walk_m_s` 0.011, `upper_arm_walk_m_s` 0.023, "
             f"`shoulder_sd_m` 0.11, `upper_arm_sd_m` 0.06, offsets 0) centre the prior on the "
             f"declared arm, as wide as the spheres lie from it over all seven (RMS).")
