@@ -1,0 +1,299 @@
+"""One tracked frame of the wrist patch compiled with numba: what patch_tracker's OpenCV path
+(PatchTracker._track_reference) does on the search region, in a few passes over its pixels with
+no per-frame allocation:
+
+- I420 (or BGR) → HSV of the region only: OpenCV's YUV2BGR_I420 (ITU-R BT.601 limited range,
+  its fixed-point coefficients, shift 20) then its integer BGR2HSV (palm_blob_kernel._hsv);
+  tests hold both equal to cv2.cvtColor on every colour they can meet;
+- the S/V-masked hue range mask (colour.range_mask) and its 3 x 3 opening (cv2.morphologyEx,
+  the region's edge as the image's: pixels outside are ignored);
+- CamShift (Bradski 1998; OpenCV's cv::meanShift and cv::CamShift, their roundings kept);
+- the region under CamShift's centre (8-connected, as detect/regions.py labels it), its area,
+  centroid, box and hue counts for the appearance check (detect/patch_check.look).
+
+``cache=True``: the compile happens once per install and is loaded from __pycache__.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from armtrack_cli.detect.colour import HUE_BINS
+from armtrack_cli.detect.palm_blob_kernel import HDIV, SDIV, _hsv
+from armtrack_cli.detect.patch_check import Look, aspect_of
+from armtrack_cli.vision.yuv import YuvFrame
+
+# OpenCV's YUV420 → RGB fixed-point coefficients (ITU-R BT.601, limited range; shift 20)
+CY, CUB, CUG, CVG, CVR, SHIFT = 1220542, 2116026, -409993, -852492, 1673527, 20
+HALF = 1 << (SHIFT - 1)
+NITERS = 10  # patch_tracker.TERM's iterations (its eps 0.5 rounds to 0 in cv::meanShift)
+TOLERANCE = 10  # cv::CamShift grows meanShift's window by this on every side
+FAIL, OK = 0.0, 1.0
+RES = 14  # status, cx, cy, width, height, angle, wx, wy, ww, wh, area, u, v, cut
+
+
+class Work:
+    """Work arrays for search regions of up to (height, width) pixels: hue, mask, opening's
+    scratch, the region's flood-fill marks and stack, its hue counts and the result row."""
+
+    def __init__(self, height: int, width: int):
+        self.shape = (height, width)
+        self.hue = np.empty((height, width), np.uint8)
+        self.mask = np.empty((height, width), np.uint8)
+        self.tmp = np.empty((height, width), np.uint8)
+        self.seen = np.zeros((height, width), np.uint8)  # all zero between calls
+        self.stack = np.empty(height * width, np.int32)
+        self.counts = np.zeros(HUE_BINS, np.int64)
+        self.res = np.zeros(RES)
+
+
+@njit(cache=True, inline="always")
+def _sat(x):
+    return 0 if x < 0 else (255 if x > 255 else x)
+
+
+@njit(cache=True, inline="always")
+def _yuv_bgr(yy, u, v):
+    """OpenCV's YUV2BGR_I420 for one pixel (its uvToRGBuv and yRGBuvToRGBA)."""
+    uu, vv = u - 128, v - 128
+    y = max(0, yy - 16) * CY
+    r = _sat((y + HALF + CVR * vv) >> SHIFT)
+    g = _sat((y + HALF + CVG * vv + CUG * uu) >> SHIFT)
+    b = _sat((y + HALF + CUB * uu) >> SHIFT)
+    return b, g, r
+
+
+@njit(cache=True, inline="always")
+def _in_range(h, s, v, rng):
+    """colour.range_mask on one pixel: rng = (h_lo, s_lo, v_lo, h_hi, s_hi, v_hi), the hue
+    range wrapping through red when h_lo > h_hi."""
+    if s < rng[1] or s > rng[4] or v < rng[2] or v > rng[5]:
+        return False
+    if rng[0] <= rng[3]:
+        return rng[0] <= h <= rng[3]
+    return h >= rng[0] or h <= rng[3]
+
+
+@njit(cache=True)
+def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, hue, mask):
+    """hue[:h, :w] and the range mask (255 in range) of the frame's [y0:y1, x0:x1]."""
+    for r in range(y1 - y0):
+        y = y0 + r
+        for c in range(x1 - x0):
+            x = x0 + c
+            b, g, rr = _yuv_bgr(np.int64(yp[y, x]), np.int64(up[y >> 1, x >> 1]),
+                                np.int64(vp[y >> 1, x >> 1]))
+            h, s, v = _hsv(b, g, rr, SDIV, HDIV)
+            hue[r, c] = h
+            mask[r, c] = 255 if _in_range(h, s, v, rng) else 0
+
+
+@njit(cache=True)
+def hsv_mask_bgr(bgr, x0, y0, x1, y1, rng, hue, mask):
+    """hsv_mask_i420 for a BGR image."""
+    for r in range(y1 - y0):
+        for c in range(x1 - x0):
+            h, s, v = _hsv(np.int64(bgr[y0 + r, x0 + c, 0]), np.int64(bgr[y0 + r, x0 + c, 1]),
+                           np.int64(bgr[y0 + r, x0 + c, 2]), SDIV, HDIV)
+            hue[r, c] = h
+            mask[r, c] = 255 if _in_range(h, s, v, rng) else 0
+
+
+@njit(cache=True)
+def open3(mask, tmp, h, w):
+    """mask[:h, :w] opened by a 3 x 3 square in place (erode, then dilate; pixels outside the
+    region are ignored, as cv2.morphologyEx's default border does)."""
+    for r in range(h):
+        for c in range(w):
+            m = 255
+            for rr in range(max(r - 1, 0), min(r + 2, h)):
+                for cc in range(max(c - 1, 0), min(c + 2, w)):
+                    if mask[rr, cc] == 0:
+                        m = 0
+            tmp[r, c] = m
+    for r in range(h):
+        for c in range(w):
+            m = 0
+            for rr in range(max(r - 1, 0), min(r + 2, h)):
+                for cc in range(max(c - 1, 0), min(c + 2, w)):
+                    if tmp[rr, cc] != 0:
+                        m = 255
+            mask[r, c] = m
+
+
+@njit(cache=True)
+def _moments(mask, x, y, w, h):
+    """Raw moments m00, m10, m01, m20, m11, m02 of mask[y:y+h, x:x+w] (window coordinates),
+    exact integers as doubles (cv::moments on 8-bit)."""
+    m00 = m10 = m01 = m20 = m11 = m02 = 0
+    for r in range(h):
+        s0 = s1 = s2 = 0
+        for c in range(w):
+            p = np.int64(mask[y + r, x + c])
+            s0 += p
+            s1 += p * c
+            s2 += p * c * c
+        m00 += s0
+        m10 += s1
+        m01 += s0 * r
+        m20 += s2
+        m11 += s1 * r
+        m02 += s0 * r * r
+    return float(m00), float(m10), float(m01), float(m20), float(m11), float(m02)
+
+
+@njit(cache=True)
+def _mean_shift(mask, H, W, x, y, w, h, niters):
+    """cv::meanShift with eps 0 (cvRound(0.5²)): the window moved to its mass's centre."""
+    for _ in range(niters):
+        m00, m10, m01, _a, _b, _c = _moments(mask, x, y, w, h)
+        if abs(m00) < 2.220446049250313e-16:
+            break
+        dx = int(np.rint(m10 / m00 - w * 0.5))
+        dy = int(np.rint(m01 / m00 - h * 0.5))
+        nx, ny = min(max(x + dx, 0), W - w), min(max(y + dy, 0), H - h)
+        if nx == x and ny == y:
+            break
+        x, y = nx, ny
+    return x, y
+
+
+@njit(cache=True)
+def camshift(mask, H, W, x, y, w, h, niters, res):
+    """cv::CamShift on mask[:H, :W] from window (x, y, w, h) inside it: res[1:10] = centre,
+    size (width, height), angle (deg), window (x, y, w, h); False when the window holds no
+    mass (OpenCV's empty box)."""
+    x, y = _mean_shift(mask, H, W, x, y, w, h, niters)
+    x, y = max(x - TOLERANCE, 0), max(y - TOLERANCE, 0)
+    w, h = min(w + 2 * TOLERANCE, W - x), min(h + 2 * TOLERANCE, H - y)
+    m00, m10, m01, m20, m11, m02 = _moments(mask, x, y, w, h)
+    if abs(m00) < 2.220446049250313e-16:
+        return False
+    inv = 1.0 / m00
+    cx, cy = m10 * inv, m01 * inv  # cv::moments' central moments
+    mu20, mu11, mu02 = m20 - m10 * cx, m11 - m10 * cy, m02 - m01 * cy
+    xc, yc = int(np.rint(m10 * inv + x)), int(np.rint(m01 * inv + y))
+    a, b, c = mu20 * inv, mu11 * inv, mu02 * inv
+    square = math.sqrt(4 * b * b + (a - c) * (a - c))
+    theta = math.atan2(2 * b, a - c + square)
+    cs, sn = math.cos(theta), math.sin(theta)
+    rotate_a = max(0.0, cs * cs * mu20 + 2 * cs * sn * mu11 + sn * sn * mu02)
+    rotate_c = max(0.0, sn * sn * mu20 - 2 * cs * sn * mu11 + cs * cs * mu02)
+    length, width = math.sqrt(rotate_a * inv) * 4, math.sqrt(rotate_c * inv) * 4
+    if length < width:
+        length, width = width, length
+        cs, sn = sn, cs
+        theta = math.pi * 0.5 - theta
+    t0 = max(int(np.rint(abs(length * cs))), int(np.rint(abs(width * sn)))) + 2
+    w = min(t0, (W - xc) * 2)
+    t0 = max(int(np.rint(abs(length * sn))), int(np.rint(abs(width * cs)))) + 2
+    h = min(t0, (H - yc) * 2)
+    x, y = max(0, xc - w // 2), max(0, yc - h // 2)
+    w, h = min(W - x, w), min(H - y, h)
+    ang = np.float32((math.pi * 0.5 + theta) * 180.0 / math.pi)
+    while ang < 0:
+        ang += np.float32(360)
+    while ang >= 360:
+        ang -= np.float32(360)
+    if ang >= 180:
+        ang -= np.float32(180)
+    res[1] = np.float32(x) + np.float32(w) * np.float32(0.5)
+    res[2] = np.float32(y) + np.float32(h) * np.float32(0.5)
+    res[3], res[4], res[5] = np.float32(width), np.float32(length), ang
+    res[6], res[7], res[8], res[9] = x, y, w, h
+    return True
+
+
+@njit(cache=True)
+def region_at(mask, H, W, u, v, seen, stack, counts, hue, res):
+    """The 8-connected region of mask[:H, :W] under pixel (u, v), as detect/regions.py and
+    patch_check.look see it: res[10:14] = area, centroid (u, v) and whether its box touches
+    the region's edge; counts[h] += its pixels of hue h. The centroid is computed as
+    Regions computes it (on the box of the mask's pixels, from an even row and column)."""
+    bx, by = W, H  # the mask's box corner, made even (Regions.x0, y0)
+    for r in range(H):
+        for c in range(W):
+            if mask[r, c] and c < bx:
+                bx = c
+            if mask[r, c] and r < by:
+                by = r
+    bx, by = bx & ~1, by & ~1
+    n, top = 0, 0
+    sx = sy = 0
+    ux0, uy0, ux1, uy1 = W, H, -1, -1
+    stack[0] = v * W + u
+    seen[v, u] = 1
+    top = 1
+    while top > 0:
+        top -= 1
+        p = stack[top]
+        r, c = p // W, p % W
+        n += 1
+        sx += c - bx
+        sy += r - by
+        ux0, uy0, ux1, uy1 = min(ux0, c), min(uy0, r), max(ux1, c), max(uy1, r)
+        counts[hue[r, c]] += 1
+        for rr in range(max(r - 1, 0), min(r + 2, H)):
+            for cc in range(max(c - 1, 0), min(c + 2, W)):
+                if mask[rr, cc] and not seen[rr, cc]:
+                    seen[rr, cc] = 1
+                    stack[top] = rr * W + cc
+                    top += 1
+    for r in range(uy0, uy1 + 1):  # the marks back to zero for the next call
+        for c in range(ux0, ux1 + 1):
+            seen[r, c] = 0
+    res[10] = n
+    res[11] = sx / n + bx
+    res[12] = sy / n + by
+    res[13] = 1.0 if (ux0 == 0 or uy0 == 0 or ux1 + 1 >= W or uy1 + 1 >= H) else 0.0
+
+
+@njit(cache=True)
+def track_tail(hue, mask, tmp, H, W, sx, sy, sw, sh, niters, seen, stack, counts, res):
+    """After the HSV pass: the opening, CamShift from window (sx, sy, sw, sh), and the region
+    under its centre (res as camshift and region_at fill it; res[0] = OK, or FAIL when there
+    is no mass or the centre is outside the region or off the mask)."""
+    res[0] = FAIL
+    open3(mask, tmp, H, W)
+    if not camshift(mask, H, W, sx, sy, sw, sh, niters, res):
+        return
+    cx, cy = res[1], res[2]
+    if not (0 <= cx < W and 0 <= cy < H) or mask[int(cy), int(cx)] == 0:
+        return
+    counts[:] = 0
+    region_at(mask, H, W, int(cx), int(cy), seen, stack, counts, hue, res)
+    res[0] = OK
+
+
+class WindowTracker:
+    """PatchTracker's tracked frame by the kernel: ``track`` returns what
+    patch_tracker.track_reference returns (CamShift's box and window in the search region's
+    pixels, and patch_check.Look of the region under its centre), or None."""
+
+    def __init__(self, low, high):
+        self.rng = np.array([*(int(v) for v in low), *(int(v) for v in high)], np.int64)
+        self.work: Work | None = None
+
+    def track(self, frame, box, start):
+        x0, y0, x1, y1 = box
+        H, W = y1 - y0, x1 - x0
+        k = self.work
+        if k is None or k.shape[0] < frame.shape[0] or k.shape[1] < frame.shape[1]:
+            k = self.work = Work(*frame.shape[:2])
+        if isinstance(frame, YuvFrame):
+            hsv_mask_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng, k.hue, k.mask)
+        else:
+            hsv_mask_bgr(frame, x0, y0, x1, y1, self.rng, k.hue, k.mask)
+        track_tail(k.hue, k.mask, k.tmp, H, W, *start, NITERS, k.seen, k.stack, k.counts, k.res)
+        res = k.res
+        if res[0] == FAIL:
+            return None
+        hist = k.counts.astype(np.float32)  # the shape calcHist gives for one channel
+        total = float(hist.sum())  # as colour.hue_distribution normalises calcHist's counts
+        seen = Look(float(res[10]), aspect_of(res[3], res[4]), hist / total if total > 0
+                    else hist, (float(res[11]), float(res[12])), bool(res[13]))
+        rect = ((float(res[1]), float(res[2])), (float(res[3]), float(res[4])), float(res[5]))
+        return rect, (int(res[6]), int(res[7]), int(res[8]), int(res[9])), seen
