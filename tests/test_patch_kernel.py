@@ -13,6 +13,7 @@ import pytest
 
 from armtrack_cli.detect import patch_kernel as pk
 from armtrack_cli.detect.colour import range_mask
+from armtrack_cli.detect.palm_blob_kernel import prefilter_bounds
 from armtrack_cli.detect.patch_tracker import TERM, PatchTracker, track_reference
 from armtrack_cli.vision.yuv import YuvFrame
 
@@ -42,16 +43,21 @@ def test_hue_and_mask_of_every_yuv_equal_opencv(every_yuv, low, high):
     hsv = cv2.cvtColor(cv2.cvtColor(i420, cv2.COLOR_YUV2BGR_I420), cv2.COLOR_BGR2HSV)
     hue, mask = np.empty((H, W), np.uint8), np.empty((H, W), np.uint8)
     rng = np.array([*low, *high], np.int64)
-    pk.hsv_mask_i420(f.y, f.u, f.v, 0, 0, W, H, rng, hue, mask)
-    np.testing.assert_array_equal(hue, hsv[..., 0])
-    np.testing.assert_array_equal(mask, range_mask(hsv, low, high))
+    pre, row, maybe = prefilter_bounds(rng), np.empty(3 * W, np.uint8), np.empty(W, np.uint8)
+    table = pk.chroma_table(rng)
+    pk.hsv_mask_i420(f.y, f.u, f.v, 0, 0, W, H, rng, table, hue, mask)
+    want = range_mask(hsv, low, high)
+    np.testing.assert_array_equal(mask, want)
+    np.testing.assert_array_equal(hue[want > 0], hsv[..., 0][want > 0])  # only there needed
     sub = (slice(1001, 1400), slice(2003, 2101))  # a window of odd corners, as tracking cuts
-    pk.hsv_mask_i420(f.y, f.u, f.v, 2003, 1001, 2101, 1400, rng, hue, mask)
-    np.testing.assert_array_equal(hue[:399, :98], hsv[sub][..., 0])
+    inside = want[sub] > 0
+    pk.hsv_mask_i420(f.y, f.u, f.v, 2003, 1001, 2101, 1400, rng, table, hue, mask)
+    np.testing.assert_array_equal(mask[:399, :98], want[sub])
+    np.testing.assert_array_equal(hue[:399, :98][inside], hsv[sub][..., 0][inside])
     bgr = cv2.cvtColor(i420, cv2.COLOR_YUV2BGR_I420)[sub]
-    pk.hsv_mask_bgr(np.ascontiguousarray(bgr), 0, 0, 98, 399, rng, hue, mask)
-    np.testing.assert_array_equal(hue[:399, :98], hsv[sub][..., 0])
-    np.testing.assert_array_equal(mask[:399, :98], range_mask(hsv[sub], low, high))
+    pk.hsv_mask_bgr(bgr, 0, 0, 98, 399, rng, pre, row, maybe, hue, mask)
+    np.testing.assert_array_equal(mask[:399, :98], want[sub])
+    np.testing.assert_array_equal(hue[:399, :98][inside], hsv[sub][..., 0][inside])
 
 
 def _blobs(rng, h, w, n):

@@ -16,13 +16,14 @@ no per-frame allocation:
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 from numba import njit
 
 from armtrack_cli.detect.colour import HUE_BINS
-from armtrack_cli.detect.palm_blob_kernel import HDIV, SDIV, _hsv
+from armtrack_cli.detect.palm_blob_kernel import HDIV, SDIV, _hsv, _maybe_row, prefilter_bounds
 from armtrack_cli.detect.patch_check import Look, aspect_of
 from armtrack_cli.vision.yuv import YuvFrame
 
@@ -47,6 +48,8 @@ class Work:
         self.seen = np.zeros((height, width), np.uint8)  # all zero between calls
         self.stack = np.empty(height * width, np.int32)
         self.counts = np.zeros(HUE_BINS, np.int64)
+        self.row = np.empty(3 * width + 8, np.uint8)
+        self.maybe = np.zeros(width + 8, np.uint8)
         self.res = np.zeros(RES)
 
 
@@ -78,50 +81,105 @@ def _in_range(h, s, v, rng):
 
 
 @njit(cache=True)
-def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, hue, mask):
-    """hue[:h, :w] and the range mask (255 in range) of the frame's [y0:y1, x0:x1]."""
-    for r in range(y1 - y0):
-        y = y0 + r
-        for c in range(x1 - x0):
-            x = x0 + c
-            b, g, rr = _yuv_bgr(np.int64(yp[y, x]), np.int64(up[y >> 1, x >> 1]),
-                                np.int64(vp[y >> 1, x >> 1]))
-            h, s, v = _hsv(b, g, rr, SDIV, HDIV)
-            hue[r, c] = h
-            mask[r, c] = 255 if _in_range(h, s, v, rng) else 0
+def chroma_table(rng):
+    """(256, 256) uint8: 1 where some luma Y makes (Y, U, V) in range rng (the 2 x 2 blocks
+    of other chroma hold no pixel of the patch's colour and are skipped), 0 elsewhere.
+    Exact: every Y is tried (below 16 all convert as 16)."""
+    out = np.zeros((256, 256), np.uint8)
+    for u in range(256):
+        for v in range(256):
+            for yy in range(16, 256):
+                b, g, r = _yuv_bgr(yy, u, v)
+                h, s, val = _hsv(b, g, r, SDIV, HDIV)
+                if _in_range(h, s, val, rng):
+                    out[u, v] = 1
+                    break
+    return out
 
 
 @njit(cache=True)
-def hsv_mask_bgr(bgr, x0, y0, x1, y1, rng, hue, mask):
+def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask):
+    """hue[:h, :w] and the range mask (255 in range) of the frame's [y0:y1, x0:x1], the hue
+    only where the mask is 255: each pixel converted (OpenCV's YUV2BGR_I420, then BGR2HSV)
+    only where its chroma's ``table`` (chroma_table(rng)) entry is 1. Returns the box
+    (c0, r0, c1, r1) of the mask's pixels (c1 = 0 when there are none)."""
+    c0, r0, c1, r1 = x1 - x0, y1 - y0, 0, 0
+    for r in range(y1 - y0):
+        y = y0 + r
+        urow, vrow = up[y >> 1], vp[y >> 1]
+        for c in range(x1 - x0):
+            x = x0 + c
+            u, v = urow[x >> 1], vrow[x >> 1]
+            if not table[u, v]:
+                mask[r, c] = 0
+                continue
+            b, g, rr = _yuv_bgr(np.int64(yp[y, x]), np.int64(u), np.int64(v))
+            h, s, val = _hsv(b, g, rr, SDIV, HDIV)
+            hue[r, c] = h
+            mask[r, c] = 0
+            if _in_range(h, s, val, rng):
+                mask[r, c] = 255
+                c0, r0, c1, r1 = min(c0, c), min(r0, r), max(c1, c + 1), max(r1, r + 1)
+    return c0, r0, c1, r1
+
+
+@njit(cache=True)
+def _mask_row(row, n, rng, pre, maybe, hue, mask, r):
+    """Hue and range mask (255 in range) of a flat BGR row of n pixels into hue[r], mask[r]:
+    palm_blob_kernel._maybe_row's vectorised superset first, the exact test on what it
+    keeps (elsewhere the mask is 0 and the hue is not needed)."""
+    _maybe_row(row, n, pre, maybe)
+    for c in range(n):
+        if not maybe[c]:
+            mask[r, c] = 0
+            continue
+        h, s, v = _hsv(np.int64(row[3 * c]), np.int64(row[3 * c + 1]), np.int64(row[3 * c + 2]),
+                       SDIV, HDIV)
+        hue[r, c] = h
+        mask[r, c] = 255 if _in_range(h, s, v, rng) else 0
+
+
+@njit(cache=True)
+def hsv_mask_bgr(bgr, x0, y0, x1, y1, rng, pre, row, maybe, hue, mask):
     """hsv_mask_i420 for a BGR image."""
     for r in range(y1 - y0):
+        for c in range(3 * (x1 - x0)):
+            row[c] = bgr[y0 + r, x0 + c // 3, c % 3]
+        _mask_row(row, x1 - x0, rng, pre, maybe, hue, mask, r)
+    c0, r0, c1, r1 = x1 - x0, y1 - y0, 0, 0
+    for r in range(y1 - y0):
         for c in range(x1 - x0):
-            h, s, v = _hsv(np.int64(bgr[y0 + r, x0 + c, 0]), np.int64(bgr[y0 + r, x0 + c, 1]),
-                           np.int64(bgr[y0 + r, x0 + c, 2]), SDIV, HDIV)
-            hue[r, c] = h
-            mask[r, c] = 255 if _in_range(h, s, v, rng) else 0
+            if mask[r, c]:
+                c0, r0, c1, r1 = min(c0, c), min(r0, r), max(c1, c + 1), max(r1, r + 1)
+    return c0, r0, c1, r1
+
+
+@njit(cache=True)
+def _min3(src, dst, h, w, erode):
+    """dst = the 3 x 3 minimum (erode) or maximum of src[:h, :w], pixels outside ignored:
+    across each row, then down each column (through dst's own rows, kept in a rolling
+    pair)."""
+    for r in range(h):
+        for c in range(w):
+            a = src[r, c]
+            lo = src[r, c - 1] if c > 0 else a
+            hi = src[r, c + 1] if c + 1 < w else a
+            dst[r, c] = min(a, min(lo, hi)) if erode else max(a, max(lo, hi))
+    for c in range(w):
+        prev = dst[0, c]
+        for r in range(h):
+            a = dst[r, c]
+            nxt = dst[r + 1, c] if r + 1 < h else a
+            dst[r, c] = min(prev, min(a, nxt)) if erode else max(prev, max(a, nxt))
+            prev = a
 
 
 @njit(cache=True)
 def open3(mask, tmp, h, w):
     """mask[:h, :w] opened by a 3 x 3 square in place (erode, then dilate; pixels outside the
     region are ignored, as cv2.morphologyEx's default border does)."""
-    for r in range(h):
-        for c in range(w):
-            m = 255
-            for rr in range(max(r - 1, 0), min(r + 2, h)):
-                for cc in range(max(c - 1, 0), min(c + 2, w)):
-                    if mask[rr, cc] == 0:
-                        m = 0
-            tmp[r, c] = m
-    for r in range(h):
-        for c in range(w):
-            m = 0
-            for rr in range(max(r - 1, 0), min(r + 2, h)):
-                for cc in range(max(c - 1, 0), min(c + 2, w)):
-                    if tmp[rr, cc] != 0:
-                        m = 255
-            mask[r, c] = m
+    _min3(mask, tmp, h, w, True)
+    _min3(tmp, mask, h, w, False)
 
 
 @njit(cache=True)
@@ -208,14 +266,15 @@ def camshift(mask, H, W, x, y, w, h, niters, res):
 
 
 @njit(cache=True)
-def region_at(mask, H, W, u, v, seen, stack, counts, hue, res):
+def region_at(mask, H, W, u, v, seen, stack, counts, hue, res, box):
     """The 8-connected region of mask[:H, :W] under pixel (u, v), as detect/regions.py and
     patch_check.look see it: res[10:14] = area, centroid (u, v) and whether its box touches
     the region's edge; counts[h] += its pixels of hue h. The centroid is computed as
-    Regions computes it (on the box of the mask's pixels, from an even row and column)."""
+    Regions computes it (on the box of the mask's pixels, from an even row and column);
+    ``box`` (c0, r0, c1, r1) holds all of the mask's pixels."""
     bx, by = W, H  # the mask's box corner, made even (Regions.x0, y0)
-    for r in range(H):
-        for c in range(W):
+    for r in range(box[1], box[3]):
+        for c in range(box[0], box[2]):
             if mask[r, c] and c < bx:
                 bx = c
             if mask[r, c] and r < by:
@@ -252,20 +311,34 @@ def region_at(mask, H, W, u, v, seen, stack, counts, hue, res):
 
 
 @njit(cache=True)
-def track_tail(hue, mask, tmp, H, W, sx, sy, sw, sh, niters, seen, stack, counts, res):
-    """After the HSV pass: the opening, CamShift from window (sx, sy, sw, sh), and the region
-    under its centre (res as camshift and region_at fill it; res[0] = OK, or FAIL when there
-    is no mass or the centre is outside the region or off the mask)."""
+def track_tail(hue, mask, tmp, H, W, box, sx, sy, sw, sh, niters, seen, stack, counts, res):
+    """After the HSV pass (``box``: its mask's box): the opening, CamShift from window (sx,
+    sy, sw, sh), and the region under its centre (res as camshift and region_at fill it;
+    res[0] = OK, or FAIL when there is no mass or the centre is outside the region or off the
+    mask). The opening is done on the box grown by 2 px, outside which it is 0 anyway (as
+    patch_masks.patch_mask does)."""
     res[0] = FAIL
-    open3(mask, tmp, H, W)
+    c0, r0, c1, r1 = box
+    if c1 == 0:
+        return
+    c0, r0, c1, r1 = max(c0 - 2, 0), max(r0 - 2, 0), min(c1 + 2, W), min(r1 + 2, H)
+    open3(mask[r0:r1, c0:c1], tmp[r0:r1, c0:c1], r1 - r0, c1 - c0)
     if not camshift(mask, H, W, sx, sy, sw, sh, niters, res):
         return
     cx, cy = res[1], res[2]
     if not (0 <= cx < W and 0 <= cy < H) or mask[int(cy), int(cx)] == 0:
         return
     counts[:] = 0
-    region_at(mask, H, W, int(cx), int(cy), seen, stack, counts, hue, res)
+    region_at(mask, H, W, int(cx), int(cy), seen, stack, counts, hue, res, (c0, r0, c1, r1))
     res[0] = OK
+
+
+@functools.lru_cache(maxsize=8)
+def _chroma_table(rng: tuple) -> np.ndarray:
+    """chroma_table, once per colour range in a process (about 0.1 s)."""
+    table = chroma_table(np.array(rng, np.int64))
+    table.flags.writeable = False
+    return table
 
 
 class WindowTracker:
@@ -275,6 +348,8 @@ class WindowTracker:
 
     def __init__(self, low, high):
         self.rng = np.array([*(int(v) for v in low), *(int(v) for v in high)], np.int64)
+        self.pre = prefilter_bounds(self.rng)
+        self.table = _chroma_table(tuple(self.rng))
         self.work: Work | None = None
 
     def track(self, frame, box, start):
@@ -284,10 +359,13 @@ class WindowTracker:
         if k is None or k.shape[0] < frame.shape[0] or k.shape[1] < frame.shape[1]:
             k = self.work = Work(*frame.shape[:2])
         if isinstance(frame, YuvFrame):
-            hsv_mask_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng, k.hue, k.mask)
+            box = hsv_mask_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng,
+                                self.table, k.hue, k.mask)
         else:
-            hsv_mask_bgr(frame, x0, y0, x1, y1, self.rng, k.hue, k.mask)
-        track_tail(k.hue, k.mask, k.tmp, H, W, *start, NITERS, k.seen, k.stack, k.counts, k.res)
+            box = hsv_mask_bgr(frame, x0, y0, x1, y1, self.rng, self.pre, k.row, k.maybe,
+                               k.hue, k.mask)
+        track_tail(k.hue, k.mask, k.tmp, H, W, box, *start, NITERS, k.seen, k.stack, k.counts,
+                   k.res)
         res = k.res
         if res[0] == FAIL:
             return None
