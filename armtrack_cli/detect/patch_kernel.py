@@ -50,6 +50,7 @@ class Work:
         self.counts = np.zeros(HUE_BINS, np.int64)
         self.row = np.empty(3 * width + 8, np.uint8)
         self.maybe = np.zeros(width + 8, np.uint8)
+        self.cols = np.empty(width // 2 + 2, np.int64)
         self.res = np.zeros(RES)
 
 
@@ -98,28 +99,34 @@ def chroma_table(rng):
 
 
 @njit(cache=True)
-def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask):
+def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols):
     """hue[:h, :w] and the range mask (255 in range) of the frame's [y0:y1, x0:x1], the hue
     only where the mask is 255: each pixel converted (OpenCV's YUV2BGR_I420, then BGR2HSV)
-    only where its chroma's ``table`` (chroma_table(rng)) entry is 1. Returns the box
-    (c0, r0, c1, r1) of the mask's pixels (c1 = 0 when there are none)."""
+    only where its chroma's ``table`` (chroma_table(rng)) entry is 1 (``cols``: scratch of
+    a chroma row's length). Returns the box (c0, r0, c1, r1) of the mask's pixels (c1 = 0
+    when there are none)."""
     c0, r0, c1, r1 = x1 - x0, y1 - y0, 0, 0
     for r in range(y1 - y0):
-        y = y0 + r
-        urow, vrow = up[y >> 1], vp[y >> 1]
-        for c in range(x1 - x0):
-            x = x0 + c
-            u, v = urow[x >> 1], vrow[x >> 1]
-            if not table[u, v]:
-                mask[r, c] = 0
-                continue
-            b, g, rr = _yuv_bgr(np.int64(yp[y, x]), np.int64(u), np.int64(v))
-            h, s, val = _hsv(b, g, rr, SDIV, HDIV)
-            hue[r, c] = h
-            mask[r, c] = 0
-            if _in_range(h, s, val, rng):
-                mask[r, c] = 255
-                c0, r0, c1, r1 = min(c0, c), min(r0, r), max(c1, c + 1), max(r1, r + 1)
+        mask[r, :x1 - x0] = 0
+    for cy in range(y0 >> 1, ((y1 - 1) >> 1) + 1):
+        urow, vrow = up[cy], vp[cy]
+        n = 0
+        for cx in range(x0 >> 1, ((x1 - 1) >> 1) + 1):  # the 2 x 2 blocks that may hold it
+            if table[urow[cx], vrow[cx]]:
+                cols[n] = cx
+                n += 1
+        for y in range(max(2 * cy, y0), min(2 * cy + 2, y1)):
+            r = y - y0
+            for k in range(n):
+                cx = cols[k]
+                u, v = np.int64(urow[cx]), np.int64(vrow[cx])
+                for x in range(max(2 * cx, x0), min(2 * cx + 2, x1)):
+                    b, g, rr = _yuv_bgr(np.int64(yp[y, x]), u, v)
+                    h, s, val = _hsv(b, g, rr, SDIV, HDIV)
+                    if _in_range(h, s, val, rng):
+                        c = x - x0
+                        hue[r, c], mask[r, c] = h, 255
+                        c0, r0, c1, r1 = min(c0, c), min(r0, r), max(c1, c + 1), max(r1, r + 1)
     return c0, r0, c1, r1
 
 
@@ -360,7 +367,7 @@ class WindowTracker:
             k = self.work = Work(*frame.shape[:2])
         if isinstance(frame, YuvFrame):
             box = hsv_mask_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng,
-                                self.table, k.hue, k.mask)
+                                self.table, k.hue, k.mask, k.cols)
         else:
             box = hsv_mask_bgr(frame, x0, y0, x1, y1, self.rng, self.pre, k.row, k.maybe,
                                k.hue, k.mask)
