@@ -359,12 +359,28 @@ class WindowTracker:
         self.table = _chroma_table(tuple(self.rng))
         self.work: Work | None = None
 
-    def track(self, frame, box, start):
-        x0, y0, x1, y1 = box
-        H, W = y1 - y0, x1 - x0
+    def _work(self, frame) -> Work:
         k = self.work
         if k is None or k.shape[0] < frame.shape[0] or k.shape[1] < frame.shape[1]:
             k = self.work = Work(*frame.shape[:2])
+        return k
+
+    def whole_mask(self, frame: YuvFrame) -> tuple[np.ndarray, np.ndarray]:
+        """The whole frame's hue (valid where the mask is 255) and its opened range mask
+        (patch_masks.patch_mask of its HSV): views of work arrays, valid until the next
+        call."""
+        k, (H, W) = self._work(frame), frame.shape[:2]
+        c0, r0, c1, r1 = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng,
+                                       self.table, k.hue, k.mask, k.cols)
+        if c1:
+            c0, r0, c1, r1 = max(c0 - 2, 0), max(r0 - 2, 0), min(c1 + 2, W), min(r1 + 2, H)
+            open3(k.mask[r0:r1, c0:c1], k.tmp[r0:r1, c0:c1], r1 - r0, c1 - c0)
+        return k.hue[:H, :W], k.mask[:H, :W]
+
+    def track(self, frame, box, start):
+        x0, y0, x1, y1 = box
+        H, W = y1 - y0, x1 - x0
+        k = self._work(frame)
         if isinstance(frame, YuvFrame):
             box = hsv_mask_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng,
                                 self.table, k.hue, k.mask, k.cols)

@@ -32,7 +32,7 @@ from armtrack_cli.detect.patch_check import HISTORY, Reference, look
 from armtrack_cli.detect.patch_kernel import WindowTracker
 from armtrack_cli.detect.patch_masks import OPEN3, sparse_patch_mask
 from armtrack_cli.detect.regions import Regions
-from armtrack_cli.vision.yuv import whole_bgr, window_bgr
+from armtrack_cli.vision.yuv import YuvFrame, whole_bgr, window_bgr
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
 RELINK_FRAMES = 3  # a tracklet is taken only once its next frames can vouch for its first
@@ -158,7 +158,7 @@ class PatchTracker:
         if self.window is not None and self._track(frame_index, frame):
             return
         self.window = None
-        self._acquire(frame_index, whole_bgr(frame))
+        self._acquire(frame_index, frame)
 
     def _search_region(self, shape) -> tuple[int, int, int, int]:
         x, y, w, h = self.window
@@ -202,14 +202,23 @@ class PatchTracker:
         self.ref.add(seen, i)
 
     # --- acquiring
-    def _acquire(self, i: int, bgr: np.ndarray) -> None:
+    def _whole_mask(self, frame) -> tuple[np.ndarray, np.ndarray]:
+        """The whole frame's HSV (or its hue alone: only the hue of the mask's pixels is
+        read) and patch_masks.patch_mask of it: by the kernel from I420 planes, else by
+        sparse_patch_mask."""
+        if self._kernel and isinstance(frame, YuvFrame):
+            return self._kernel.whole_mask(frame)
+        bgr = whole_bgr(frame)
+        if self._hsv is None or self._hsv.shape != bgr.shape:
+            self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
+        sparse_patch_mask(bgr, self.low, self.high, self._hsv, self._bp)
+        return self._hsv, self._bp
+
+    def _acquire(self, i: int, frame) -> None:
         if self.last[2] >= self._episode:  # the first frame of this acquisition (the patch
             self._episode = i  # was seen since the last one began)
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
-        if self._hsv is None or self._hsv.shape != bgr.shape:
-            self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
-        hsv, bp = self._hsv, self._bp
-        sparse_patch_mask(bgr, self.low, self.high, hsv, bp)
+        hsv, bp = self._whole_mask(frame)
         regions = Regions(bp)
         claimed = self._follow(i, hsv, bp, regions)
         self._start(i, hsv, bp, regions, claimed)
