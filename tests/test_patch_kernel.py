@@ -14,6 +14,7 @@ import pytest
 from armtrack_cli.detect import patch_kernel as pk
 from armtrack_cli.detect.colour import range_mask
 from armtrack_cli.detect.palm_blob_kernel import prefilter_bounds
+from armtrack_cli.detect.patch_masks import patch_mask
 from armtrack_cli.detect.patch_tracker import TERM, PatchTracker, track_reference
 from armtrack_cli.vision.yuv import YuvFrame
 
@@ -58,6 +59,21 @@ def test_hue_and_mask_of_every_yuv_equal_opencv(every_yuv, low, high):
     pk.hsv_mask_bgr(bgr, 0, 0, 98, 399, rng, pre, row, maybe, hue, mask)
     np.testing.assert_array_equal(mask[:399, :98], want[sub])
     np.testing.assert_array_equal(hue[:399, :98][inside], hsv[sub][..., 0][inside])
+
+
+@pytest.mark.parametrize("low, high", RANGES[:2])
+def test_whole_frame_mask_and_box_equal_opencv(every_yuv, low, high):
+    """The acquiring pass's opened mask of a whole frame and its box, against patch_mask on
+    OpenCV's HSV and cv2.boundingRect (the every-(Y, U, V) frame: noise, many regions)."""
+    f = every_yuv
+    H, W = f.y.shape
+    i420 = np.concatenate([f.y.reshape(-1), f.u.reshape(-1), f.v.reshape(-1)]).reshape(-1, W)
+    hsv = cv2.cvtColor(cv2.cvtColor(i420, cv2.COLOR_YUV2BGR_I420), cv2.COLOR_BGR2HSV)
+    hue, mask, box = pk.WindowTracker(low, high).whole_mask(f)
+    want = patch_mask(hsv, low, high)
+    np.testing.assert_array_equal(mask, want)
+    assert box == tuple(cv2.boundingRect(want))
+    np.testing.assert_array_equal(hue[want > 0], hsv[..., 0][want > 0])
 
 
 def _blobs(rng, h, w, n):

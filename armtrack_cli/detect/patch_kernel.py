@@ -190,6 +190,26 @@ def open3(mask, tmp, h, w):
 
 
 @njit(cache=True)
+def opened_box(mask, tmp, H, W, box):
+    """mask[:H, :W] opened (open3) on ``box`` (c0, r0, c1, r1: its pixels' box) grown by 2 px,
+    outside which the opening is 0 anyway; returns the opened mask's box (x, y, w, h), as
+    cv2.boundingRect gives it ((0, 0, 0, 0) when empty)."""
+    c0, r0, c1, r1 = box
+    if c1 == 0:
+        return 0, 0, 0, 0
+    c0, r0, c1, r1 = max(c0 - 2, 0), max(r0 - 2, 0), min(c1 + 2, W), min(r1 + 2, H)
+    open3(mask[r0:r1, c0:c1], tmp[r0:r1, c0:c1], r1 - r0, c1 - c0)
+    x0, y0, x1, y1 = W, H, 0, 0
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            if mask[r, c]:
+                x0, y0, x1, y1 = min(x0, c), min(y0, r), max(x1, c + 1), max(y1, r + 1)
+    if x1 == 0:
+        return 0, 0, 0, 0
+    return x0, y0, x1 - x0, y1 - y0
+
+
+@njit(cache=True)
 def _moments(mask, x, y, w, h):
     """Raw moments m00, m10, m01, m20, m11, m02 of mask[y:y+h, x:x+w] (window coordinates),
     exact integers as doubles (cv::moments on 8-bit)."""
@@ -365,17 +385,14 @@ class WindowTracker:
             k = self.work = Work(*frame.shape[:2])
         return k
 
-    def whole_mask(self, frame: YuvFrame) -> tuple[np.ndarray, np.ndarray]:
-        """The whole frame's hue (valid where the mask is 255) and its opened range mask
-        (patch_masks.patch_mask of its HSV): views of work arrays, valid until the next
-        call."""
+    def whole_mask(self, frame: YuvFrame) -> tuple[np.ndarray, np.ndarray, tuple]:
+        """The whole frame's hue (valid where the mask is 255), its opened range mask
+        (patch_masks.patch_mask of its HSV; views of work arrays, valid until the next call)
+        and the mask's box (x, y, w, h) as cv2.boundingRect gives it."""
         k, (H, W) = self._work(frame), frame.shape[:2]
-        c0, r0, c1, r1 = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng,
-                                       self.table, k.hue, k.mask, k.cols)
-        if c1:
-            c0, r0, c1, r1 = max(c0 - 2, 0), max(r0 - 2, 0), min(c1 + 2, W), min(r1 + 2, H)
-            open3(k.mask[r0:r1, c0:c1], k.tmp[r0:r1, c0:c1], r1 - r0, c1 - c0)
-        return k.hue[:H, :W], k.mask[:H, :W]
+        box = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng, self.table, k.hue,
+                            k.mask, k.cols)
+        return k.hue[:H, :W], k.mask[:H, :W], opened_box(k.mask, k.tmp, H, W, box)
 
     def track(self, frame, box, start):
         x0, y0, x1, y1 = box

@@ -202,24 +202,24 @@ class PatchTracker:
         self.ref.add(seen, i)
 
     # --- acquiring
-    def _whole_mask(self, frame) -> tuple[np.ndarray, np.ndarray]:
+    def _whole_mask(self, frame) -> tuple[np.ndarray, np.ndarray, Regions]:
         """The whole frame's HSV (or its hue alone: only the hue of the mask's pixels is
-        read) and patch_masks.patch_mask of it: by the kernel from I420 planes, else by
-        sparse_patch_mask."""
+        read), patch_masks.patch_mask of it and its regions: by the kernel from I420 planes,
+        else by sparse_patch_mask."""
         if self._kernel and isinstance(frame, YuvFrame):
-            return self._kernel.whole_mask(frame)
+            hsv, bp, box = self._kernel.whole_mask(frame)
+            return hsv, bp, Regions(bp, box)
         bgr = whole_bgr(frame)
         if self._hsv is None or self._hsv.shape != bgr.shape:
             self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
         sparse_patch_mask(bgr, self.low, self.high, self._hsv, self._bp)
-        return self._hsv, self._bp
+        return self._hsv, self._bp, Regions(self._bp)
 
     def _acquire(self, i: int, frame) -> None:
         if self.last[2] >= self._episode:  # the first frame of this acquisition (the patch
             self._episode = i  # was seen since the last one began)
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
-        hsv, bp = self._whole_mask(frame)
-        regions = Regions(bp)
+        hsv, bp, regions = self._whole_mask(frame)
         claimed = self._follow(i, hsv, bp, regions)
         self._start(i, hsv, bp, regions, claimed)
         self.active = [t for t in self.active if t.alive]
