@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from armtrack_cli.detect import patch_kernel as pk
+from armtrack_cli.detect.camshift_kernel import camshift
 from armtrack_cli.detect.colour import range_mask
 from armtrack_cli.detect.palm_blob_kernel import prefilter_bounds
 from armtrack_cli.detect.patch_masks import patch_mask
@@ -113,7 +114,7 @@ def test_camshift_equals_opencv():
         x, y = int(rng.integers(0, w)), int(rng.integers(0, h))
         ww, wh = int(rng.integers(1, w - x + 1)), int(rng.integers(1, h - y + 1))
         (c, size, ang), win = cv2.CamShift(m, (x, y, ww, wh), TERM)
-        ok = pk.camshift(m, h, w, x, y, ww, wh, pk.NITERS, res)
+        ok = camshift(m, h, w, x, y, ww, wh, pk.NITERS, res)
         if not ok:  # OpenCV's empty box
             empty += 1
             assert size == (0.0, 0.0) and c == (0.0, 0.0)

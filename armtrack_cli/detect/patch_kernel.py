@@ -1,15 +1,21 @@
 """One tracked frame of the wrist patch compiled with numba: what patch_tracker's OpenCV path
-(PatchTracker._track_reference) does on the search region, in a few passes over its pixels with
-no per-frame allocation:
+(patch_tracker.track_reference) does on the search region, in a few passes over its pixels
+with no per-frame allocation but the small Look it returns:
 
 - I420 (or BGR) → HSV of the region only: OpenCV's YUV2BGR_I420 (ITU-R BT.601 limited range,
   its fixed-point coefficients, shift 20) then its integer BGR2HSV (palm_blob_kernel._hsv);
   tests hold both equal to cv2.cvtColor on every colour they can meet;
 - the S/V-masked hue range mask (colour.range_mask) and its 3 x 3 opening (cv2.morphologyEx,
   the region's edge as the image's: pixels outside are ignored);
-- CamShift (Bradski 1998; OpenCV's cv::meanShift and cv::CamShift, their roundings kept);
+- CamShift (Bradski 1998; OpenCV's cv::meanShift and cv::CamShift, their roundings kept:
+  detect/camshift_kernel.py);
 - the region under CamShift's centre (8-connected, as detect/regions.py labels it), its area,
-  centroid, box and hue counts for the appearance check (detect/patch_check.look).
+  centroid, box and hue counts for the appearance check (detect/patch_check.look);
+- while re-acquiring, the whole frame's hue and opened mask (patch_masks.patch_mask) and its
+  box, for the acquiring pass.
+
+Most of the search window is not the patch's colour: a per-range table (chroma_table) says
+which (U, V) can be in range at any luma, and only the 2 x 2 blocks it keeps are converted.
 
 ``cache=True``: the compile happens once per install and is loaded from __pycache__.
 """
@@ -17,11 +23,11 @@ no per-frame allocation:
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
 from numba import njit
 
+from armtrack_cli.detect.camshift_kernel import camshift, region_at
 from armtrack_cli.detect.colour import HUE_BINS
 from armtrack_cli.detect.palm_blob_kernel import HDIV, SDIV, _hsv, _maybe_row, prefilter_bounds
 from armtrack_cli.detect.patch_check import Look, aspect_of
@@ -31,7 +37,6 @@ from armtrack_cli.vision.yuv import YuvFrame
 CY, CUB, CUG, CVG, CVR, SHIFT = 1220542, 2116026, -409993, -852492, 1673527, 20
 HALF = 1 << (SHIFT - 1)
 NITERS = 10  # patch_tracker.TERM's iterations (its eps 0.5 rounds to 0 in cv::meanShift)
-TOLERANCE = 10  # cv::CamShift grows meanShift's window by this on every side
 FAIL, OK = 0.0, 1.0
 RES = 14  # status, cx, cy, width, height, angle, wx, wy, ww, wh, area, u, v, cut
 
@@ -210,134 +215,6 @@ def opened_box(mask, tmp, H, W, box):
 
 
 @njit(cache=True)
-def _moments(mask, x, y, w, h):
-    """Raw moments m00, m10, m01, m20, m11, m02 of mask[y:y+h, x:x+w] (window coordinates),
-    exact integers as doubles (cv::moments on 8-bit)."""
-    m00 = m10 = m01 = m20 = m11 = m02 = 0
-    for r in range(h):
-        s0 = s1 = s2 = 0
-        for c in range(w):
-            p = np.int64(mask[y + r, x + c])
-            s0 += p
-            s1 += p * c
-            s2 += p * c * c
-        m00 += s0
-        m10 += s1
-        m01 += s0 * r
-        m20 += s2
-        m11 += s1 * r
-        m02 += s0 * r * r
-    return float(m00), float(m10), float(m01), float(m20), float(m11), float(m02)
-
-
-@njit(cache=True)
-def _mean_shift(mask, H, W, x, y, w, h, niters):
-    """cv::meanShift with eps 0 (cvRound(0.5²)): the window moved to its mass's centre."""
-    for _ in range(niters):
-        m00, m10, m01, _a, _b, _c = _moments(mask, x, y, w, h)
-        if abs(m00) < 2.220446049250313e-16:
-            break
-        dx = int(np.rint(m10 / m00 - w * 0.5))
-        dy = int(np.rint(m01 / m00 - h * 0.5))
-        nx, ny = min(max(x + dx, 0), W - w), min(max(y + dy, 0), H - h)
-        if nx == x and ny == y:
-            break
-        x, y = nx, ny
-    return x, y
-
-
-@njit(cache=True)
-def camshift(mask, H, W, x, y, w, h, niters, res):
-    """cv::CamShift on mask[:H, :W] from window (x, y, w, h) inside it: res[1:10] = centre,
-    size (width, height), angle (deg), window (x, y, w, h); False when the window holds no
-    mass (OpenCV's empty box)."""
-    x, y = _mean_shift(mask, H, W, x, y, w, h, niters)
-    x, y = max(x - TOLERANCE, 0), max(y - TOLERANCE, 0)
-    w, h = min(w + 2 * TOLERANCE, W - x), min(h + 2 * TOLERANCE, H - y)
-    m00, m10, m01, m20, m11, m02 = _moments(mask, x, y, w, h)
-    if abs(m00) < 2.220446049250313e-16:
-        return False
-    inv = 1.0 / m00
-    cx, cy = m10 * inv, m01 * inv  # cv::moments' central moments
-    mu20, mu11, mu02 = m20 - m10 * cx, m11 - m10 * cy, m02 - m01 * cy
-    xc, yc = int(np.rint(m10 * inv + x)), int(np.rint(m01 * inv + y))
-    a, b, c = mu20 * inv, mu11 * inv, mu02 * inv
-    square = math.sqrt(4 * b * b + (a - c) * (a - c))
-    theta = math.atan2(2 * b, a - c + square)
-    cs, sn = math.cos(theta), math.sin(theta)
-    rotate_a = max(0.0, cs * cs * mu20 + 2 * cs * sn * mu11 + sn * sn * mu02)
-    rotate_c = max(0.0, sn * sn * mu20 - 2 * cs * sn * mu11 + cs * cs * mu02)
-    length, width = math.sqrt(rotate_a * inv) * 4, math.sqrt(rotate_c * inv) * 4
-    if length < width:
-        length, width = width, length
-        cs, sn = sn, cs
-        theta = math.pi * 0.5 - theta
-    t0 = max(int(np.rint(abs(length * cs))), int(np.rint(abs(width * sn)))) + 2
-    w = min(t0, (W - xc) * 2)
-    t0 = max(int(np.rint(abs(length * sn))), int(np.rint(abs(width * cs)))) + 2
-    h = min(t0, (H - yc) * 2)
-    x, y = max(0, xc - w // 2), max(0, yc - h // 2)
-    w, h = min(W - x, w), min(H - y, h)
-    ang = np.float32((math.pi * 0.5 + theta) * 180.0 / math.pi)
-    while ang < 0:
-        ang += np.float32(360)
-    while ang >= 360:
-        ang -= np.float32(360)
-    if ang >= 180:
-        ang -= np.float32(180)
-    res[1] = np.float32(x) + np.float32(w) * np.float32(0.5)
-    res[2] = np.float32(y) + np.float32(h) * np.float32(0.5)
-    res[3], res[4], res[5] = np.float32(width), np.float32(length), ang
-    res[6], res[7], res[8], res[9] = x, y, w, h
-    return True
-
-
-@njit(cache=True)
-def region_at(mask, H, W, u, v, seen, stack, counts, hue, res, box):
-    """The 8-connected region of mask[:H, :W] under pixel (u, v), as detect/regions.py and
-    patch_check.look see it: res[10:14] = area, centroid (u, v) and whether its box touches
-    the region's edge; counts[h] += its pixels of hue h. The centroid is computed as
-    Regions computes it (on the box of the mask's pixels, from an even row and column);
-    ``box`` (c0, r0, c1, r1) holds all of the mask's pixels."""
-    bx, by = W, H  # the mask's box corner, made even (Regions.x0, y0)
-    for r in range(box[1], box[3]):
-        for c in range(box[0], box[2]):
-            if mask[r, c] and c < bx:
-                bx = c
-            if mask[r, c] and r < by:
-                by = r
-    bx, by = bx & ~1, by & ~1
-    n, top = 0, 0
-    sx = sy = 0
-    ux0, uy0, ux1, uy1 = W, H, -1, -1
-    stack[0] = v * W + u
-    seen[v, u] = 1
-    top = 1
-    while top > 0:
-        top -= 1
-        p = stack[top]
-        r, c = p // W, p % W
-        n += 1
-        sx += c - bx
-        sy += r - by
-        ux0, uy0, ux1, uy1 = min(ux0, c), min(uy0, r), max(ux1, c), max(uy1, r)
-        counts[hue[r, c]] += 1
-        for rr in range(max(r - 1, 0), min(r + 2, H)):
-            for cc in range(max(c - 1, 0), min(c + 2, W)):
-                if mask[rr, cc] and not seen[rr, cc]:
-                    seen[rr, cc] = 1
-                    stack[top] = rr * W + cc
-                    top += 1
-    for r in range(uy0, uy1 + 1):  # the marks back to zero for the next call
-        for c in range(ux0, ux1 + 1):
-            seen[r, c] = 0
-    res[10] = n
-    res[11] = sx / n + bx
-    res[12] = sy / n + by
-    res[13] = 1.0 if (ux0 == 0 or uy0 == 0 or ux1 + 1 >= W or uy1 + 1 >= H) else 0.0
-
-
-@njit(cache=True)
 def track_tail(hue, mask, tmp, H, W, box, sx, sy, sw, sh, niters, seen, stack, counts, res):
     """After the HSV pass (``box``: its mask's box): the opening, CamShift from window (sx,
     sy, sw, sh), and the region under its centre (res as camshift and region_at fill it;
@@ -366,6 +243,15 @@ def _chroma_table(rng: tuple) -> np.ndarray:
     table = chroma_table(np.array(rng, np.int64))
     table.flags.writeable = False
     return table
+
+
+@njit(cache=True)
+def track_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, tmp, cols, start, niters,
+               seen, stack, counts, res):
+    """hsv_mask_i420 then track_tail, in one call (one dispatch from Python a frame)."""
+    box = hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols)
+    track_tail(hue, mask, tmp, y1 - y0, x1 - x0, box, start[0], start[1], start[2], start[3],
+               niters, seen, stack, counts, res)
 
 
 class WindowTracker:
@@ -399,13 +285,13 @@ class WindowTracker:
         H, W = y1 - y0, x1 - x0
         k = self._work(frame)
         if isinstance(frame, YuvFrame):
-            box = hsv_mask_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng,
-                                self.table, k.hue, k.mask, k.cols)
+            track_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng, self.table, k.hue,
+                       k.mask, k.tmp, k.cols, start, NITERS, k.seen, k.stack, k.counts, k.res)
         else:
             box = hsv_mask_bgr(frame, x0, y0, x1, y1, self.rng, self.pre, k.row, k.maybe,
                                k.hue, k.mask)
-        track_tail(k.hue, k.mask, k.tmp, H, W, box, *start, NITERS, k.seen, k.stack, k.counts,
-                   k.res)
+            track_tail(k.hue, k.mask, k.tmp, H, W, box, *start, NITERS, k.seen, k.stack,
+                       k.counts, k.res)
         res = k.res
         if res[0] == FAIL:
             return None
