@@ -182,3 +182,13 @@ def test_tracks_equal_the_reference_with_a_moving_distractor(tmp_path):
     c = session.camera.patch
     frames = _video_frames(session.camera.video, 240)
     assert _compare_tracks(frames, c.low, c.high, 30.0) > 100
+
+
+def test_tracks_on_bgr_frames_equal_the_reference():
+    """Frames given as BGR images (as a caller without I420 planes gives them): the kernel's
+    BGR pass, the same windows and detections as the reference."""
+    from armtrack_cli.session.config import load_session
+    session = load_session(Path(__file__).resolve().parents[1] / "sample_sessions" / "circle-01")
+    c = session.camera.patch
+    frames = [f.bgr() for f in _video_frames(session.camera.video, 120)]
+    assert _compare_tracks(frames, c.low, c.high, 30.0) > 30
