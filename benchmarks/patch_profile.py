@@ -24,6 +24,7 @@ sys.path.insert(0, str(REPO))
 import cv2  # noqa: E402
 
 from armtrack_cli import pipeline  # noqa: E402
+from armtrack_cli.detect import patch_kernel as pk  # noqa: E402
 from armtrack_cli.detect import patch_tracker as pt  # noqa: E402
 from armtrack_cli.session.config import load_session  # noqa: E402
 from armtrack_cli.session.video import iter_frames_i420, probe_video  # noqa: E402
@@ -63,8 +64,8 @@ def instrument() -> None:
         setattr(pt, name, timed(getattr(pt, name), name))
     pt.whole_bgr = timed(pt.whole_bgr, "whole_bgr (before the phase)", "acquiring")
     pt.Reference.failure = timed(pt.Reference.failure, "Reference.failure")
-    pt.WindowTracker.track = timed(pt.WindowTracker.track, "kernel: WindowTracker.track")
-    pt.WindowTracker.whole_mask = timed(pt.WindowTracker.whole_mask,
+    pk.WindowTracker.track = timed(pk.WindowTracker.track, "kernel: WindowTracker.track")
+    pk.WindowTracker.whole_mask = timed(pk.WindowTracker.whole_mask,
                                         "kernel: WindowTracker.whole_mask")
     pt.PatchTracker.step = timed(pt.PatchTracker.step, "step: the whole frame", "all")
     pt.PatchTracker._track = timed(pt.PatchTracker._track, "whole phase", "tracking")

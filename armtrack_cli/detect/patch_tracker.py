@@ -29,7 +29,6 @@ import numpy as np
 
 from armtrack_cli.detect.colour import hue_histogram, range_mask
 from armtrack_cli.detect.patch_check import HISTORY, Reference, look
-from armtrack_cli.detect.patch_kernel import WindowTracker
 from armtrack_cli.detect.patch_masks import OPEN3, sparse_patch_mask
 from armtrack_cli.detect.regions import Regions
 from armtrack_cli.vision.yuv import YuvFrame, whole_bgr, window_bgr
@@ -130,7 +129,10 @@ class PatchTracker:
                  fps: float = 30.0, kernel: bool = True):
         """``kernel``: track with the compiled patch_kernel (False: the OpenCV reference)."""
         self.low, self.high, self.s, self.fps = low, high, settings, fps
-        self._kernel = WindowTracker(low, high) if kernel else None
+        self._kernel = None
+        if kernel:  # numba's: imported only when a tracker is made
+            from armtrack_cli.detect.patch_kernel import WindowTracker
+            self._kernel = WindowTracker(low, high)
         self.hist = hue_histogram(int(low[0]), int(high[0]))
         self.ref = Reference(settings.ref_frames)
         self.out = np.full((1024, 6), np.nan)  # u, v, w, h, angle, ok; grown by doubling
