@@ -6,7 +6,8 @@ with the moving same-hue distractor and clutter (many frames re-acquired on the 
 
 Each named call of detect/patch_tracker.py is wrapped by a timer (about 1 µs a call, counted
 in the totals) and its time charged to the phase it ran in: tracking (the search window) or
-acquiring (the whole frame). Prints a markdown table; writes nothing.
+acquiring (the whole frame); `step` is the whole frame, Python included. One table for the
+OpenCV reference path, one for the compiled kernel. Prints markdown; writes nothing.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ sys.path.insert(0, str(REPO))
 import cv2  # noqa: E402
 
 from armtrack_cli import pipeline  # noqa: E402
+from armtrack_cli.detect import patch_kernel as pk  # noqa: E402
 from armtrack_cli.detect import patch_tracker as pt  # noqa: E402
 from armtrack_cli.session.config import load_session  # noqa: E402
 from armtrack_cli.session.video import iter_frames_i420, probe_video  # noqa: E402
@@ -62,18 +64,23 @@ def instrument() -> None:
         setattr(pt, name, timed(getattr(pt, name), name))
     pt.whole_bgr = timed(pt.whole_bgr, "whole_bgr (before the phase)", "acquiring")
     pt.Reference.failure = timed(pt.Reference.failure, "Reference.failure")
+    pk.WindowTracker.track = timed(pk.WindowTracker.track, "kernel: WindowTracker.track")
+    pk.WindowTracker.whole_mask = timed(pk.WindowTracker.whole_mask,
+                                        "kernel: WindowTracker.whole_mask")
+    pt.PatchTracker.step = timed(pt.PatchTracker.step, "step: the whole frame", "all")
     pt.PatchTracker._track = timed(pt.PatchTracker._track, "whole phase", "tracking")
     pt.PatchTracker._acquire = timed(pt.PatchTracker._acquire, "whole phase", "acquiring")
 
 
-def profile(folder: Path) -> tuple[int, dict, dict]:
+def profile(folder: Path, kernel: bool) -> tuple[int, dict, dict]:
     session = load_session(folder)
     video = probe_video(session.camera.video)
     planes = [f for _, _, f in iter_frames_i420(video)]
     c = session.camera.patch
+    pt.PatchTracker(c.low, c.high, fps=video.fps, kernel=kernel).step(0, planes[0])  # compiled
     COST.clear()
     CALLS.clear()
-    tracker = pt.PatchTracker(c.low, c.high, fps=video.fps)
+    tracker = pt.PatchTracker(c.low, c.high, fps=video.fps, kernel=kernel)
     for i, f in enumerate(planes):
         tracker.step(i, YuvFrame(f.y, f.u, f.v) if isinstance(f, YuvFrame) else f)
     return len(planes), dict(COST), dict(CALLS)
@@ -85,7 +92,14 @@ def main() -> None:
         busy = Path(tmp) / "moving-distractor"
         pipeline.simulate(busy, ArmSimSettings(duration_s=20.0, moving_distractor=True,
                                                clutter=True, distractor=True))
-        results = [(f.name, *profile(f)) for f in (REPO / "sample_sessions" / "circle-01", busy)]
+        for kernel in (False, True):
+            print("\n" + ("compiled kernel (patch_kernel.py)" if kernel else
+                          "OpenCV reference path (PatchTracker(kernel=False))") + "\n")
+            table([(f.name, *profile(f, kernel))
+                   for f in (REPO / "sample_sessions" / "circle-01", busy)])
+
+
+def table(results) -> None:
     keys = sorted({k for _, _, cost, _ in results for k in cost},
                   key=lambda k: (k[0], k[1] != "whole phase", k[1]))
     print("| phase | part | " + " | ".join(f"{name}: calls | µs per frame (all frames)"

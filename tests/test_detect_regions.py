@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from armtrack_cli.detect.colour import hue_histogram
-from armtrack_cli.detect.patch_tracker import back_projection, patch_mask, sparse_patch_mask
+from armtrack_cli.detect.patch_masks import back_projection, patch_mask, sparse_patch_mask
 from armtrack_cli.detect.regions import Regions
 
 

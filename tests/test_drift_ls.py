@@ -75,8 +75,9 @@ def test_frame_sets_add_up():
 
 
 def test_a_stage_imports_only_its_own_libraries():
-    """armtrack_cli.pipeline loads each stage on first use: detect needs no numba, no
-    scipy.signal, no matplotlib (each stage in its own process holds only its own)."""
+    """armtrack_cli.pipeline loads each stage on first use: loading detect brings no numba
+    (its detectors import their compiled kernels when made), no scipy.signal, no matplotlib
+    (each stage in its own process holds only its own)."""
     code = ("import sys; from armtrack_cli import pipeline; pipeline.detect; pipeline.calibrate; "
             "print(' '.join(m for m in ('numba', 'scipy.signal', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -29,13 +29,13 @@ import numpy as np
 
 from armtrack_cli.detect.colour import hue_histogram, range_mask
 from armtrack_cli.detect.patch_check import HISTORY, Reference, look
+from armtrack_cli.detect.patch_masks import OPEN3, sparse_patch_mask
 from armtrack_cli.detect.regions import Regions
-from armtrack_cli.vision.yuv import whole_bgr, window_bgr
+from armtrack_cli.vision.yuv import YuvFrame, whole_bgr, window_bgr
 
 TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.5)
 RELINK_FRAMES = 3  # a tracklet is taken only once its next frames can vouch for its first
 RELINK_SAME_PX = 10.0  # a region present when the patch was lost is the patch only this close
-_OPEN = np.ones((3, 3), np.uint8)
 TRACK_MASS_STEP = 1.5  # a tracklet's region changing mass by more than this in a frame ends it
 
 
@@ -105,64 +105,34 @@ def region_rect(regions: Regions, k: int):
     return ((cx + x, cy + y), size, ang), (x, y, w, h)
 
 
-def back_projection(hsv: np.ndarray, hist: np.ndarray, low, high) -> np.ndarray:
-    """Hue back-projection masked by the S and V limits (and opened to drop speckle)."""
-    bp = cv2.calcBackProject([hsv], [0], hist, [0, 180], 1)
-    sv = cv2.inRange(hsv, (0, int(low[1]), int(low[2])), (180, int(high[1]), int(high[2])))
-    return cv2.morphologyEx(cv2.bitwise_and(bp, sv), cv2.MORPH_OPEN, _OPEN)
-
-
-def patch_mask(hsv: np.ndarray, low, high) -> np.ndarray:
-    """back_projection with the patch's histogram (255 on its hue range, 0 elsewhere:
-    colour.hue_histogram) in one pass: the back-projection is then 255 exactly where the hue
-    is in range, so masked by S and V it is the HSV range mask. The opening (3 x 3) is done on
-    the box around the mask's pixels grown by 2 px, outside which it is 0 anyway (tests check
-    the equality with back_projection)."""
-    raw = range_mask(hsv, low, high)
-    x, y, w, h = cv2.boundingRect(raw)
-    if w == 0:
-        return raw
-    H, W = raw.shape
-    y0, y1, x0, x1 = max(0, y - 2), min(H, y + h + 2), max(0, x - 2), min(W, x + w + 2)
-    out = np.zeros_like(raw)
-    out[y0:y1, x0:x1] = cv2.morphologyEx(raw[y0:y1, x0:x1], cv2.MORPH_OPEN, _OPEN)
-    return out
-
-
-def sparse_patch_mask(bgr: np.ndarray, low, high, hsv_out: np.ndarray,
-                      mask_out: np.ndarray) -> None:
-    """patch_mask(cvtColor(bgr)) into ``mask_out``, computed at full resolution only in boxes
-    around what a half-resolution pass (every other row and column) finds; ``hsv_out`` gets
-    the HSV image inside those boxes (elsewhere it is stale). Exact: a pixel the 3 x 3
-    opening keeps lies in a 3 x 3 block of in-range pixels, which holds a pixel of even row
-    and column, so within 2 px of one the half-resolution pass sees; each box covers those by
-    2 px more, for the opening's own reach (tests check the equality with patch_mask)."""
-    mask_out.fill(0)
-    H, W = mask_out.shape
-    # nearest-neighbour halving takes one pixel of every 2 x 2 block (even row and column)
-    small = cv2.cvtColor(cv2.resize(bgr, ((W + 1) // 2, (H + 1) // 2),
-                                    interpolation=cv2.INTER_NEAREST), cv2.COLOR_BGR2HSV)
-    seen = cv2.dilate(range_mask(small, low, high), _OPEN)  # neighbours share a box
-    outlines, _ = cv2.findContours(seen, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    for x, y, w, h in map(cv2.boundingRect, outlines):  # each 8-connected group's box
-        # sampled pixels at full-res 2x (or 2x + 1) … 2(x + w - 1) (+ 1); kept pixels within 2
-        # of them (inner), the opening reads 2 px further (outer)
-        ix0, iy0, ix1, iy1 = max(2 * x - 2, 0), max(2 * y - 2, 0), min(2 * (x + w) + 2, W), \
-            min(2 * (y + h) + 2, H)
-        ox0, oy0, ox1, oy1 = max(ix0 - 2, 0), max(iy0 - 2, 0), min(ix1 + 2, W), min(iy1 + 2, H)
-        hsv = cv2.cvtColor(bgr[oy0:oy1, ox0:ox1], cv2.COLOR_BGR2HSV)
-        hsv_out[oy0:oy1, ox0:ox1] = hsv
-        opened = cv2.morphologyEx(range_mask(hsv, low, high), cv2.MORPH_OPEN, _OPEN)
-        inner = opened[iy0 - oy0:iy1 - oy0, ix0 - ox0:ix1 - ox0]
-        np.bitwise_or(mask_out[iy0:iy1, ix0:ix1], inner, out=mask_out[iy0:iy1, ix0:ix1])
+def track_reference(frame, box, start, low, high):
+    """The tracked frame by OpenCV (the reference patch_kernel.WindowTracker equals): in the
+    search region ``box`` (x0, y0, x1, y1) of the frame, CamShift from window ``start``
+    (region pixels) on the opened range mask, and the region under its centre; returns
+    (CamShift's box, its window, patch_check.Look of that region), or None."""
+    x0, y0, x1, y1 = box
+    hsv = cv2.cvtColor(window_bgr(frame, x0, y0, x1, y1), cv2.COLOR_BGR2HSV)
+    mask = cv2.morphologyEx(range_mask(hsv, low, high), cv2.MORPH_OPEN, OPEN3)
+    rect, win = cv2.CamShift(mask, start, TERM)
+    (cx, cy), _, _ = rect
+    if not (0 <= cx < x1 - x0 and 0 <= cy < y1 - y0) or mask[int(cy), int(cx)] == 0:
+        return None
+    regions = Regions(mask)
+    k = regions.label_at(cx, cy)
+    return rect, win, look(hsv, regions, k, win, rect)  # cut: at the search region's edge
 
 
 class PatchTracker:
     """Feed frames in order with ``step``; read per-frame detections with ``detections``."""
 
     def __init__(self, low, high, settings: PatchSettings = PatchSettings(), *,
-                 fps: float = 30.0):
+                 fps: float = 30.0, kernel: bool = True):
+        """``kernel``: track with the compiled patch_kernel (False: the OpenCV reference)."""
         self.low, self.high, self.s, self.fps = low, high, settings, fps
+        self._kernel = None
+        if kernel:  # numba's: imported only when a tracker is made
+            from armtrack_cli.detect.patch_kernel import WindowTracker
+            self._kernel = WindowTracker(low, high)
         self.hist = hue_histogram(int(low[0]), int(high[0]))
         self.ref = Reference(settings.ref_frames)
         self.out = np.full((1024, 6), np.nan)  # u, v, w, h, angle, ok; grown by doubling
@@ -190,7 +160,7 @@ class PatchTracker:
         if self.window is not None and self._track(frame_index, frame):
             return
         self.window = None
-        self._acquire(frame_index, whole_bgr(frame))
+        self._acquire(frame_index, frame)
 
     def _search_region(self, shape) -> tuple[int, int, int, int]:
         x, y, w, h = self.window
@@ -203,26 +173,22 @@ class PatchTracker:
     def _track(self, i: int, frame) -> bool:
         """CamShift in the search region around the last window; True if the patch is there."""
         x0, y0, x1, y1 = self._search_region(frame.shape)
-        hsv = cv2.cvtColor(window_bgr(frame, x0, y0, x1, y1), cv2.COLOR_BGR2HSV)
-        mask = cv2.morphologyEx(range_mask(hsv, self.low, self.high), cv2.MORPH_OPEN, _OPEN)
         x, y, w, h = self.window
         sx, sy = x + int(round(self.vel[0])) - x0, y + int(round(self.vel[1])) - y0
         sx0, sy0 = max(sx, 0), max(sy, 0)  # the start window, inside the search region
         sw, sh = min(sx + w, x1 - x0) - sx0, min(sy + h, y1 - y0) - sy0
         if sw <= 0 or sh <= 0:  # predicted out of the image
             return False
-        rect, win = cv2.CamShift(mask, (sx0, sy0, sw, sh), TERM)
-        (cx, cy), size, ang = rect
-        if not (0 <= cx < x1 - x0 and 0 <= cy < y1 - y0) or mask[int(cy), int(cx)] == 0:
+        found = self._kernel.track(frame, (x0, y0, x1, y1), (sx0, sy0, sw, sh)) \
+            if self._kernel else track_reference(frame, (x0, y0, x1, y1), (sx0, sy0, sw, sh),
+                                                 self.low, self.high)
+        if found is None:
             return False
-        regions = Regions(mask)
-        k = regions.label_at(cx, cy)
-        seen = look(hsv, regions, k, win, rect)  # cut: at the search region's edge
+        (_, size, ang), (wx, wy, ww, wh), seen = found
         u, v = seen.centroid[0] + x0, seen.centroid[1] + y0
         if np.hypot(u - self.last[0], v - self.last[1]) > self.s.max_jump_px or \
                 self.ref.failure(seen, self.s):
             return False
-        wx, wy, ww, wh = win
         self._accept(i, ((u, v), size, ang), (wx + x0, wy + y0, ww, wh), seen)
         return True
 
@@ -238,15 +204,24 @@ class PatchTracker:
         self.ref.add(seen, i)
 
     # --- acquiring
-    def _acquire(self, i: int, bgr: np.ndarray) -> None:
+    def _whole_mask(self, frame) -> tuple[np.ndarray, np.ndarray, Regions]:
+        """The whole frame's HSV (or its hue alone: only the hue of the mask's pixels is
+        read), patch_masks.patch_mask of it and its regions: by the kernel from I420 planes,
+        else by sparse_patch_mask."""
+        if self._kernel and isinstance(frame, YuvFrame):
+            hsv, bp, box = self._kernel.whole_mask(frame)
+            return hsv, bp, Regions(bp, box)
+        bgr = whole_bgr(frame)
+        if self._hsv is None or self._hsv.shape != bgr.shape:
+            self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
+        sparse_patch_mask(bgr, self.low, self.high, self._hsv, self._bp)
+        return self._hsv, self._bp, Regions(self._bp)
+
+    def _acquire(self, i: int, frame) -> None:
         if self.last[2] >= self._episode:  # the first frame of this acquisition (the patch
             self._episode = i  # was seen since the last one began)
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
-        if self._hsv is None or self._hsv.shape != bgr.shape:
-            self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
-        hsv, bp = self._hsv, self._bp
-        sparse_patch_mask(bgr, self.low, self.high, hsv, bp)
-        regions = Regions(bp)
+        hsv, bp, regions = self._whole_mask(frame)
         claimed = self._follow(i, hsv, bp, regions)
         self._start(i, hsv, bp, regions, claimed)
         self.active = [t for t in self.active if t.alive]

@@ -13,8 +13,9 @@ class Regions:
     scans it as it scans the whole mask and numbers the regions in the same order; stats are
     in whole-image pixels."""
 
-    def __init__(self, mask: np.ndarray):
-        x, y, w, h = cv2.boundingRect(mask)  # of the non-zero pixels
+    def __init__(self, mask: np.ndarray, box: tuple[int, int, int, int] | None = None):
+        """``box``: cv2.boundingRect(mask) when the caller has it already."""
+        x, y, w, h = cv2.boundingRect(mask) if box is None else box  # of the non-zero pixels
         if w == 0:
             self.n, self.x0, self.y0 = 1, 0, 0
             self.labels = np.zeros((0, 0), np.int32)
