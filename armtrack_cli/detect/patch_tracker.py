@@ -126,8 +126,10 @@ class PatchTracker:
     """Feed frames in order with ``step``; read per-frame detections with ``detections``."""
 
     def __init__(self, low, high, settings: PatchSettings = PatchSettings(), *,
-                 fps: float = 30.0, kernel: bool = True):
-        """``kernel``: track with the compiled patch_kernel (False: the OpenCV reference)."""
+                 fps: float = 30.0, kernel: bool = True, frames: int = 1024):
+        """``kernel``: track with the compiled patch_kernel (False: the OpenCV reference);
+        ``frames``: the rows to hold at first (the video's frame count, when known: the table
+        then never grows by copying)."""
         self.low, self.high, self.s, self.fps = low, high, settings, fps
         self._kernel = None
         if kernel:  # numba's: imported only when a tracker is made
@@ -135,7 +137,7 @@ class PatchTracker:
             self._kernel = WindowTracker(low, high)
         self.hist = hue_histogram(int(low[0]), int(high[0]))
         self.ref = Reference(settings.ref_frames)
-        self.out = np.full((1024, 6), np.nan)  # u, v, w, h, angle, ok; grown by doubling
+        self.out = np.full((max(int(frames), 1), 6), np.nan)  # u, v, w, h, angle, ok; doubles if short
         self.n_frames = 0
         self.window: tuple[int, int, int, int] | None = None  # set while tracking
         self.last = (np.nan, np.nan, -1)  # u, v and frame of the last accepted detection

@@ -52,7 +52,7 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
                               "add patch = { hsv_low = [H, S, V], hsv_high = [H, S, V] }")
         settings = section(doc, "detect.patch", PatchSettings, where)
         tracker = PatchTracker(session.camera.patch.low, session.camera.patch.high, settings,
-                               fps=video.fps)
+                               fps=video.fps, frames=video.n_frames)
         for i, _, img in iter_frames_ahead(video, i420=True):
             tracker.step(i, img)
             if on_frame:
