@@ -38,7 +38,7 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
         setup = time.perf_counter() - setup
         start += setup
         found = []  # (frame, t, (k, 4) blobs): one array a frame, no Python object a blob
-        for i, t, img in iter_frames_ahead(video):
+        for i, t, img in iter_frames_ahead(video, i420=True):
             if len(b := det.detect(img)):
                 found.append((i, t, b))
             if on_frame:
