@@ -58,14 +58,17 @@ def _luma_range(u, v, cand, sdiv, hdiv):
 @njit(cache=True)
 def _row_ranges(up, vp, cy, cx0, cx1, ytab, cand, sdiv, hdiv, lo, hi):
     """lo[i], hi[i] (i = 2 (cx - cx0) and the one after it): the luma range of the candidates
-    of the row's blocks cx0 <= cx < cx1, from ytab (filled in where a chroma is new)."""
+    of the row's blocks cx0 <= cx < cx1, from ytab (filled in where a chroma is new); an
+    empty range as 1, 0 (uint8)."""
     for cx in range(cx0, cx1):
         k = np.int64(up[cy, cx]) * 256 + np.int64(vp[cy, cx])
         if ytab[k, 0] == UNSET:
             ytab[k, 0], ytab[k, 1] = _luma_range(np.int64(up[cy, cx]), np.int64(vp[cy, cx]),
                                                  cand, sdiv, hdiv)
-        i = 2 * (cx - cx0)
-        lo[i], lo[i + 1], hi[i], hi[i + 1] = ytab[k, 0], ytab[k, 0], ytab[k, 1], ytab[k, 1]
+        i, a, b = 2 * (cx - cx0), ytab[k, 0], ytab[k, 1]
+        if a > b:
+            a, b = 1, 0
+        lo[i], lo[i + 1], hi[i], hi[i + 1] = a, a, b, b
 
 
 @njit(cache=True)
@@ -73,7 +76,7 @@ def _scan_i420(yp, up, vp, x0, y0, x1, y1, ytab, cand, core, sdiv, hdiv, label, 
                parent, binv, coref, lo, hi, maybe):
     """palm_blob_kernel._scan on I420 planes: the box's candidate pixels in raster order
     (1-based), each linked to its candidate neighbours visited before it; returns how many.
-    lo, hi (int16) and maybe (uint8): work rows of the frame's width rounded up to 8."""
+    lo, hi and maybe (uint8): work rows of the frame's width rounded up to 8."""
     n, w = 0, x1 - x0
     words = maybe.view(np.uint64)  # the row's flags eight at a time: most are all zero
     nw = (w + 7) // 8
@@ -81,21 +84,24 @@ def _scan_i420(yp, up, vp, x0, y0, x1, y1, ytab, cand, core, sdiv, hdiv, label, 
         if y == y0 or y % 2 == 0:
             _row_ranges(up, vp, y >> 1, x0 >> 1, (x1 + 1) >> 1, ytab, cand, sdiv, hdiv, lo, hi)
         for j in range(w):  # vectorised: a superset of the candidates
-            yv = np.int16(yp[y, x0 + j])
+            yv = yp[y, x0 + j]
             maybe[j] = (yv >= lo[j]) & (yv <= hi[j])
         maybe[w:nw * 8] = 0
-        for j in range(nw * 8):
-            if words[j // 8] == 0 or not maybe[j]:
+        for wj in range(nw):
+            if words[wj] == 0:
                 continue
-            x = x0 + j
-            b, g, r = i420_bgr(np.int64(yp[y, x]), np.int64(up[y >> 1, x >> 1]),
-                               np.int64(vp[y >> 1, x >> 1]))
-            h, s, val = _hsv(b, g, r, sdiv, hdiv)
-            if not _inside(h, s, val, cand):
-                continue
-            n += 1
-            add(n, x, y, h, s, _inside(h, s, val, core), x0, y0, x1, label, px, py, parent,
-                binv, coref)
+            for j in range(8 * wj, 8 * wj + 8):
+                if not maybe[j]:
+                    continue
+                x = x0 + j
+                b, g, r = i420_bgr(np.int64(yp[y, x]), np.int64(up[y >> 1, x >> 1]),
+                                   np.int64(vp[y >> 1, x >> 1]))
+                h, s, val = _hsv(b, g, r, sdiv, hdiv)
+                if not _inside(h, s, val, cand):
+                    continue
+                n += 1
+                add(n, x, y, h, s, _inside(h, s, val, core), x0, y0, x1, label, px, py, parent,
+                    binv, coref)
     return n
 
 

@@ -44,7 +44,7 @@ class Work:
         self.parent, self.bin = np.empty(n, np.int32), np.empty(n, np.int32)
         self.core = np.empty(n, np.uint8)
         self.maybe = np.zeros((width + 7) // 8 * 8, np.uint8)  # one row's prefilter
-        self.lo, self.hi = (np.empty((width + 7) // 8 * 8, np.int16) for _ in range(2))
+        self.lo, self.hi = (np.empty((width + 7) // 8 * 8, np.uint8) for _ in range(2))
 
 
 @njit(cache=True, inline="always")
@@ -165,17 +165,20 @@ def _scan(bgr, x0, y0, x1, y1, cand, pre, core, sdiv, hdiv, label, px, py, paren
     for y in range(y0, y1):
         _maybe_row(flat[3 * (y * W + x0):3 * (y * W + x1)], x1 - x0, pre, maybe)
         maybe[x1 - x0:nw * 8] = 0
-        for j in range(nw * 8):
-            if words[j // 8] == 0 or not maybe[j]:
+        for wj in range(nw):
+            if words[wj] == 0:
                 continue
-            x = x0 + j
-            h, s, v = _hsv(np.int64(bgr[y, x, 0]), np.int64(bgr[y, x, 1]),
-                           np.int64(bgr[y, x, 2]), sdiv, hdiv)
-            if not _inside(h, s, v, cand):
-                continue
-            n += 1
-            add(n, x, y, h, s, _inside(h, s, v, core), x0, y0, x1, label, px, py, parent, binv,
-                coref)
+            for j in range(8 * wj, 8 * wj + 8):
+                if not maybe[j]:
+                    continue
+                x = x0 + j
+                h, s, v = _hsv(np.int64(bgr[y, x, 0]), np.int64(bgr[y, x, 1]),
+                               np.int64(bgr[y, x, 2]), sdiv, hdiv)
+                if not _inside(h, s, v, cand):
+                    continue
+                n += 1
+                add(n, x, y, h, s, _inside(h, s, v, core), x0, y0, x1, label, px, py, parent, binv,
+                    coref)
     return n
 
 
