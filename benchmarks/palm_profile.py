@@ -70,12 +70,10 @@ def per_frame(frames: list) -> dict[str, tuple[float, int]]:
         det = pb.PalmBlobDetector(c.low, c.high)
         det.warm()
         fresh, undo = [YuvFrame(f.y, f.u, f.v) for f in frames], []
-        timed(det, "_search", "search (window, or the hand's region)", undo)
-        timed(det._i420, "search_box_i420", "  the window, on the planes (kernel)", undo)
-        timed(det._kernel, "search_box", "  the hand's region, in BGR (kernel)", undo)
-        timed(pb, "whole_bgr", "whole frame to BGR (OpenCV), to search the hand's region",
-              undo)
-        timed(pb, "hand_roi", "the hand's region by skin colour (OpenCV)", undo)
+        timed(det, "_search", "search", undo)
+        timed(det, "_full", "full", undo)
+        timed(pb, "whole_bgr", "whole", undo)
+        timed(pb, "hand_roi", "skin", undo)
         t0 = time.process_time()
         for f in fresh:
             det.detect(f)
@@ -108,18 +106,25 @@ def main() -> None:
     video = probe_video(load_session(SESSION).camera.video)
     frames = [f for _, _, f in iter_frames_i420(video)]
     parts, dec, once = per_frame(frames), decode_cpu(video), once_costs()
-    total = parts.pop("detect() in all")[0]
-    print(f"wrist-rom-01, {video.n_frames} frames; CPU µs per frame (best of 3):\n")
+    total = parts["detect() in all"][0]
+    full, whole, skin = parts["full"][0], parts["whole"][0], parts["skin"][0]
+    window = parts["search"][0] - (full - skin)
+    rows = [("detect() in all", total, video.n_frames),
+            ("search of the window (kernel, on the planes)", window,
+             video.n_frames - parts["full"][1]),
+            ("re-acquiring: the hand's whole region, in all", whole + full, parts["full"][1]),
+            ("  the whole frame to BGR (OpenCV)", whole, parts["full"][1]),
+            ("  the hand by skin colour at half size (OpenCV)", skin, parts["skin"][1]),
+            ("  search of the hand's region (kernel, BGR)", full - skin, parts["full"][1]),
+            ("the rest of detect() (bookkeeping, the next window)", total - window - full - whole,
+             "")]
+    print(f"wrist-rom-01, {video.n_frames} frames; CPU µs per frame of all frames (best of "
+          "3):\n")
     print("| part | µs per frame | calls | share of detect() |\n|---|---|---|---|")
     print(f"| decoding (PyAV, I420 planes; on the other thread in `detect`) | {dec:.0f} | "
           f"{video.n_frames} | |")
-    print(f"| detect() in all | {total:.0f} | {video.n_frames} | 100 % |")
-    for k, (us, n) in parts.items():
-        print(f"| {k} | {us:.0f} | {n} | {100 * us / total:.0f} % |")
-    other = total - parts["search (window, or the hand's region)"][0] - sum(
-        v for k, (v, _) in parts.items() if not k.startswith(("search", "  ")))
-    print(f"| the rest of detect() (bookkeeping, the next window) | {other:.0f} | | "
-          f"{100 * other / total:.0f} % |")
+    for name, us, n in rows:
+        print(f"| {name} | {us:.0f} | {n} | {100 * us / total:.0f} % |")
     names = ("import numba", "numba's first use and the kernels from their cache (warm)",
              "import PyAV")
     vals = (once[0], once[2], once[3])

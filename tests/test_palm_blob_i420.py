@@ -145,3 +145,20 @@ def test_planes_give_the_reference_blobs_on_random_scenes(low, high, hues):
     for centroid in ("region", "core"):  # every region scored, the window used
         settings = PalmBlobSettings(full_every=5, centroid=centroid, min_score=0.0)
         assert _same_blobs(frames, low, high, settings) > 3 * len(frames)
+
+
+def test_detect_writes_the_reference_blobs_of_the_decoded_frames(tmp_path):
+    """`armtrack detect` on the sample (PyAV's planes on a second thread, the compiled search)
+    writes, row for row, what the OpenCV reference finds on the frames converted to BGR."""
+    import pandas as pd
+
+    frames, lo, hi = _planes(SAMPLE)
+    ref = PalmBlobDetector(lo, hi, compiled=False)
+    want = [(i, b) for i, f in enumerate(frames) for b in ref.detect(f.bgr())]
+    pipeline.detect(SAMPLE, out=tmp_path)
+    got = pd.read_csv(tmp_path / "detections.csv", comment="#")
+    assert len(got) == len(want) > 6 * len(frames)
+    assert np.array_equal(got["frame"].to_numpy(), [i for i, _ in want])
+    b = np.array([b for _, b in want])
+    assert np.allclose(got[["u", "v", "score"]].to_numpy(), b[:, [0, 1, 3]], rtol=0, atol=1e-6)
+    assert np.array_equal(got["area"].to_numpy(), b[:, 2].astype(int))
