@@ -8,7 +8,7 @@ search_box on the BGR image OpenCV converts the planes to (cv2.COLOR_YUV2BGR_I42
 - Prefilter: a 2 x 2 block shares its chroma (U, V), so which luma values Y can make a pixel
   of that chroma a candidate is a property of (U, V) alone. The range [lowest, highest] of
   them is worked out (over all 256 Y) the first time a chroma is met, and kept in a table
-  of the detector's (YTable): a pixel outside its block's range cannot be a candidate; one
+  of the detector's (y_table): a pixel outside its block's range cannot be a candidate; one
   inside is converted and tested exactly. Most blocks (skin, background) have no such Y at
   all, and cost one look-up.
 """
