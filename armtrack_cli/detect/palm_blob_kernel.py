@@ -44,6 +44,7 @@ class Work:
         self.parent, self.bin = np.empty(n, np.int32), np.empty(n, np.int32)
         self.core = np.empty(n, np.uint8)
         self.maybe = np.zeros((width + 7) // 8 * 8, np.uint8)  # one row's prefilter
+        self.lo, self.hi = (np.empty((width + 7) // 8 * 8, np.uint8) for _ in range(2))
 
 
 @njit(cache=True, inline="always")
@@ -129,6 +130,30 @@ def prefilter_bounds(rng: np.ndarray) -> np.ndarray:
                     np.float32)
 
 
+@njit(cache=True, inline="always")
+def add(n, x, y, h, s, is_core, x0, y0, x1, label, px, py, parent, binv, coref):
+    """Candidate pixel n (1-based, in raster order) at (x, y) of the box from x0, y0 to x1 with
+    hue h and saturation s: recorded, and linked to its candidate 8-neighbours visited before
+    it (outside the box the label image is 0)."""
+    px[n], py[n], parent[n] = x, y, n
+    binv[n] = (h // H_DIV) * S_BINS + s // S_DIV
+    coref[n] = is_core
+    label[y, x] = n
+    # the neighbour above, when set, was already joined to the other three (they touch it)
+    up = label[y - 1, x] if y > y0 else 0
+    if up:
+        _union(parent, n, up)
+        return
+    left = label[y, x - 1] if x > x0 else 0
+    if left:
+        _union(parent, n, left)
+    if y > y0:
+        if x > x0 and label[y - 1, x - 1]:
+            _union(parent, n, label[y - 1, x - 1])
+        if x + 1 < x1 and label[y - 1, x + 1]:
+            _union(parent, n, label[y - 1, x + 1])
+
+
 @njit(cache=True)
 def _scan(bgr, x0, y0, x1, y1, cand, pre, core, sdiv, hdiv, label, px, py, parent, binv,
           coref, maybe):
@@ -140,33 +165,20 @@ def _scan(bgr, x0, y0, x1, y1, cand, pre, core, sdiv, hdiv, label, px, py, paren
     for y in range(y0, y1):
         _maybe_row(flat[3 * (y * W + x0):3 * (y * W + x1)], x1 - x0, pre, maybe)
         maybe[x1 - x0:nw * 8] = 0
-        for j in range(nw * 8):
-            if words[j // 8] == 0 or not maybe[j]:
+        for wj in range(nw):
+            if words[wj] == 0:
                 continue
-            x = x0 + j
-            h, s, v = _hsv(np.int64(bgr[y, x, 0]), np.int64(bgr[y, x, 1]),
-                           np.int64(bgr[y, x, 2]), sdiv, hdiv)
-            if not _inside(h, s, v, cand):
-                continue
-            n += 1
-            px[n], py[n], parent[n] = x, y, n
-            binv[n] = (h // H_DIV) * S_BINS + s // S_DIV
-            coref[n] = _inside(h, s, v, core)
-            label[y, x] = n
-            # 8-neighbours already visited (outside the box the label image is 0); the one
-            # above, when set, was already joined to the other three (they touch it)
-            up = label[y - 1, x] if y > y0 else 0
-            if up:
-                _union(parent, n, up)
-                continue
-            left = label[y, x - 1] if x > x0 else 0
-            if left:
-                _union(parent, n, left)
-            if y > y0:
-                if x > x0 and label[y - 1, x - 1]:
-                    _union(parent, n, label[y - 1, x - 1])
-                if x + 1 < x1 and label[y - 1, x + 1]:
-                    _union(parent, n, label[y - 1, x + 1])
+            for j in range(8 * wj, 8 * wj + 8):
+                if not maybe[j]:
+                    continue
+                x = x0 + j
+                h, s, v = _hsv(np.int64(bgr[y, x, 0]), np.int64(bgr[y, x, 1]),
+                               np.int64(bgr[y, x, 2]), sdiv, hdiv)
+                if not _inside(h, s, v, cand):
+                    continue
+                n += 1
+                add(n, x, y, h, s, _inside(h, s, v, core), x0, y0, x1, label, px, py, parent, binv,
+                    coref)
     return n
 
 
@@ -194,7 +206,7 @@ def _regions(n, px, py, parent, width):
     return comp, m
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def search_box(bgr, x0, y0, x1, y1, cand, pre, core, ref, ref_sum, min_area, min_score,
                edge_fails, core_centroid, sdiv, hdiv, label, px, py, parent, binv, coref, maybe):
     """Blobs of the box [x0, x1) × [y0, y1) (x0, y0 even) in the candidate colour range cand
@@ -202,9 +214,17 @@ def search_box(bgr, x0, y0, x1, y1, cand, pre, core, ref, ref_sum, min_area, min
     ((k, 4) u, v, area, score of the regions of min_area pixels or more scoring min_score or
     more, True); ((0, 4), False) when edge_fails and a region touches an edge of the box that
     is not the frame's. ref: the reference histogram (flat, colour.HS_BINS), ref_sum its sum."""
-    H, W = label.shape
     n = _scan(bgr, x0, y0, x1, y1, cand, pre, core, sdiv, hdiv, label, px, py, parent, binv,
               coref, maybe)
+    return blobs_of(n, x0, y0, x1, y1, ref, ref_sum, min_area, min_score, edge_fails,
+                    core_centroid, label, px, py, parent, binv, coref)
+
+
+@njit(cache=True)
+def blobs_of(n, x0, y0, x1, y1, ref, ref_sum, min_area, min_score, edge_fails, core_centroid,
+             label, px, py, parent, binv, coref):
+    """search_box's result from the box's n candidate pixels (_scan's lists)."""
+    H, W = label.shape
     comp, m = _regions(n, px, py, parent, W)
     st = np.zeros((m, 6))  # area, Σx, Σy, and the same over the core pixels (box coordinates)
     ext = np.empty((m, 4), np.int64)  # min x, max x, min y, max y

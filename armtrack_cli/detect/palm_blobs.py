@@ -24,6 +24,7 @@ import numpy as np
 
 from armtrack_cli.detect.colour import HS_BINS, HS_RANGES, hs_histogram, range_mask
 from armtrack_cli.detect.regions import Regions
+from armtrack_cli.vision.yuv import YuvFrame, whole_bgr
 
 CENTROIDS = ("region", "core")  # PalmBlobSettings.centroid
 SKIN_YCRCB = ((0, 135, 80), (255, 175, 130))  # Cr 135-175, Cb 80-130 (Chai & Ngan style bounds)
@@ -63,6 +64,14 @@ def hand_roi(bgr: np.ndarray, margin: float) -> tuple[int, int, int, int] | None
     return max(0, x - gx), max(0, y - gy), min(W, x + w + gx), min(H, y + h + gy)
 
 
+def _planes_of(frame: YuvFrame) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The kernel's I420 planes of a frame of even height and width; None for odd sizes (their
+    last row or column is converted by padding: vision/yuv.py), searched in BGR."""
+    if frame.y.shape[0] % 2 or frame.y.shape[1] % 2:
+        return None
+    return frame.y, frame.u, frame.v
+
+
 class PalmBlobDetector:
     """compiled: boxes searched by detect/palm_blob_kernel.py (numba); False: by OpenCV
     (_search_reference, the reference the kernel is tested against)."""
@@ -79,8 +88,9 @@ class PalmBlobDetector:
         self._cand = (lo, (min(180, self.high[0] + settings.hue_slack), 255, 255))
         self._kernel = None
         if compiled:  # numba's: imported only when a detector is made
-            from armtrack_cli.detect import palm_blob_kernel
-            self._kernel = palm_blob_kernel
+            from armtrack_cli.detect import palm_blob_i420, palm_blob_kernel
+            self._kernel, self._i420 = palm_blob_kernel, palm_blob_i420
+            self._ytab = palm_blob_i420.y_table()
             cand = np.array([*self._cand[0], *self._cand[1]], np.int64)
             self._ranges = (cand, palm_blob_kernel.prefilter_bounds(cand),
                             np.array([*self.low, *self.high], np.int64))
@@ -95,24 +105,33 @@ class PalmBlobDetector:
         if self._kernel is not None:
             k, (cand, pre, core), w = self._kernel, self._ranges, self._kernel.Work(2, 2)
             k.window_of(np.zeros((1, 4)), 1, 2, 2)
-            k.search_box(np.zeros((2, 2, 3), np.uint8), 0, 0, 2, 2, cand, pre, core,
-                         np.ones(HS_BINS[0] * HS_BINS[1]), 1.0, 1.0, 0.0, True, False, k.SDIV,
-                         k.HDIV, w.label, w.px, w.py, w.parent, w.bin, w.core, w.maybe)
+            ref = np.ones(HS_BINS[0] * HS_BINS[1])
+            k.search_box(np.zeros((2, 2, 3), np.uint8), 0, 0, 2, 2, cand, pre, core, ref, 1.0,
+                         1.0, 0.0, True, False, k.SDIV, k.HDIV, w.label, w.px, w.py, w.parent,
+                         w.bin, w.core, w.maybe)
+            p, q = np.zeros((2, 2), np.uint8), np.zeros((1, 1), np.uint8)
+            self._i420.search_box_i420(p, q, q, 0, 0, 2, 2, self._ytab, cand,
+                                       core, ref, 1.0, 1.0, 0.0, True, False, k.SDIV, k.HDIV,
+                                       w.label, w.px, w.py, w.parent, w.bin, w.core, w.lo,
+                                       w.hi, w.maybe)
 
-    def detect(self, bgr: np.ndarray) -> np.ndarray:
-        """(k, 4) candidate blobs: u, v (sub-pixel centroid), area (px), score in [0, 1]."""
+    def detect(self, frame) -> np.ndarray:
+        """(k, 4) candidate blobs: u, v (sub-pixel centroid), area (px), score in [0, 1].
+        frame: a BGR image, or a vision.yuv.YuvFrame (its I420 planes: the window is converted
+        by the kernel pixel by pixel as OpenCV's I420 conversion does, the whole frame by
+        OpenCV only to search the hand's region) with the same blobs as its BGR image."""
         out = None
         if self._window is not None and self._since_full < self.s.full_every:
-            out = self._search(bgr, self._window, edge_fails=True)
+            out = self._search(frame, self._window, edge_fails=True)
             if out is not None and len(out) < self._last_n:
                 out = None  # a blob may have left the window: search the hand's region
         if out is None:
-            out = self._full(bgr)
+            out = self._full(whole_bgr(frame))
             self._since_full = 0
             self.full_searches += 1
         self._since_full += 1
         self._last_n = len(out)
-        self._window = self._window_of(out, bgr.shape) if len(out) else None
+        self._window = self._window_of(out, frame.shape) if len(out) else None
         return out
 
     def _window_of(self, blobs: np.ndarray, shape) -> tuple[int, int, int, int]:
@@ -130,20 +149,26 @@ class PalmBlobDetector:
             return np.zeros((0, 4))
         return self._search(bgr, (roi[0] & ~1, roi[1] & ~1, roi[2], roi[3]), edge_fails=False)
 
-    def _search(self, bgr: np.ndarray, box, *, edge_fails: bool) -> np.ndarray | None:
-        """Candidates in box (x0, y0, x1, y1), x0 and y0 even; None if edge_fails and a
-        candidate touches an edge of the box that is not the image's."""
+    def _search(self, frame, box, *, edge_fails: bool) -> np.ndarray | None:
+        """Candidates in box (x0, y0, x1, y1), x0 and y0 even, of a BGR image or a YuvFrame;
+        None if edge_fails and a candidate touches an edge of the box that is not the image's."""
         if self._kernel is None or self.reference is None:
-            return self._search_reference(bgr, box, edge_fails=edge_fails)
-        k, (H, W) = self._kernel, bgr.shape[:2]
+            return self._search_reference(whole_bgr(frame), box, edge_fails=edge_fails)
+        k, (H, W) = self._kernel, frame.shape[:2]
         if self._work is None or self._work.shape != (H, W):
             self._work = k.Work(H, W)
         w, (cand, pre, core) = self._work, self._ranges
-        out, ok = k.search_box(
-            bgr, *box, cand, pre, core, self.reference, self._ref_sum,
-            float(self.s.min_area_px), float(self.s.min_score), edge_fails,
-            self.s.centroid == "core", k.SDIV, k.HDIV, w.label, w.px, w.py, w.parent, w.bin,
-            w.core, w.maybe)
+        args = (float(self.s.min_area_px), float(self.s.min_score), edge_fails,
+                self.s.centroid == "core", k.SDIV, k.HDIV, w.label, w.px, w.py, w.parent, w.bin,
+                w.core)
+        planes = _planes_of(frame) if isinstance(frame, YuvFrame) else None
+        if planes is not None:
+            out, ok = self._i420.search_box_i420(*planes, *box, self._ytab, cand, core,
+                                                 self.reference, self._ref_sum, *args, w.lo,
+                                                 w.hi, w.maybe)
+        else:
+            out, ok = k.search_box(whole_bgr(frame), *box, cand, pre, core, self.reference,
+                                   self._ref_sum, *args, w.maybe)
         return out if ok else None
 
     def _search_reference(self, bgr: np.ndarray, box, *, edge_fails: bool) -> np.ndarray | None:

@@ -38,7 +38,7 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
         setup = time.perf_counter() - setup
         start += setup
         found = _Blobs()
-        for i, t, img in iter_frames_ahead(video):
+        for i, t, img in iter_frames_ahead(video, i420=True):
             if len(b := det.detect(img)):
                 found.add(i, t, b)
             if on_frame:
