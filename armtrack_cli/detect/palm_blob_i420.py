@@ -19,10 +19,8 @@ import numpy as np
 from numba import njit
 
 from armtrack_cli.detect.palm_blob_kernel import _hsv, _inside, add, blobs_of
+from armtrack_cli.detect.yuv_pixel import i420_bgr
 
-# OpenCV's YUV420 -> RGB, coefficients x 2^20: R = 1.164 (Y - 16) + 1.596 (V - 128),
-# G = 1.164 (Y - 16) - 0.813 (V - 128) - 0.391 (U - 128), B = 1.164 (Y - 16) + 2.018 (U - 128)
-SHIFT, CY, CUB, CUG, CVG, CVR = 20, 1220542, 2116026, -409993, -852492, 1673527
 UNSET = 257  # a chroma whose luma range has not been worked out yet
 
 
@@ -30,17 +28,6 @@ def y_table() -> np.ndarray:
     """(65536, 2) int16: for each chroma (U * 256 + V) the lowest and highest luma of a
     candidate pixel (lowest > highest: none); UNSET until first met. One per colour range."""
     return np.full((1 << 16, 2), UNSET, np.int16)
-
-
-@njit(cache=True, inline="always")
-def i420_bgr(y, u, v):
-    """OpenCV's I420 -> BGR of one pixel: luma y, its block's chroma u, v (0-255 each)."""
-    yy = max(y - 16, 0) * CY
-    half = 1 << (SHIFT - 1)
-    b = (yy + CUB * (u - 128) + half) >> SHIFT
-    g = (yy + CVG * (v - 128) + CUG * (u - 128) + half) >> SHIFT
-    r = (yy + CVR * (v - 128) + half) >> SHIFT
-    return min(max(b, 0), 255), min(max(g, 0), 255), min(max(r, 0), 255)
 
 
 @njit(cache=True)

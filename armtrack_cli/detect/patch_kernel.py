@@ -31,11 +31,9 @@ from armtrack_cli.detect.camshift_kernel import camshift, region_at
 from armtrack_cli.detect.colour import HUE_BINS
 from armtrack_cli.detect.palm_blob_kernel import HDIV, SDIV, _hsv, _maybe_row, prefilter_bounds
 from armtrack_cli.detect.patch_check import Look, aspect_of
+from armtrack_cli.detect.yuv_pixel import i420_bgr
 from armtrack_cli.vision.yuv import YuvFrame
 
-# OpenCV's YUV420 → RGB fixed-point coefficients (ITU-R BT.601, limited range; shift 20)
-CY, CUB, CUG, CVG, CVR, SHIFT = 1220542, 2116026, -409993, -852492, 1673527, 20
-HALF = 1 << (SHIFT - 1)
 NITERS = 10  # patch_tracker.TERM's iterations (its eps 0.5 rounds to 0 in cv::meanShift)
 FAIL, OK = 0.0, 1.0
 RES = 14  # status, cx, cy, width, height, angle, wx, wy, ww, wh, area, u, v, cut
@@ -60,22 +58,6 @@ class Work:
 
 
 @njit(cache=True, inline="always")
-def _sat(x):
-    return 0 if x < 0 else (255 if x > 255 else x)
-
-
-@njit(cache=True, inline="always")
-def _yuv_bgr(yy, u, v):
-    """OpenCV's YUV2BGR_I420 for one pixel (its uvToRGBuv and yRGBuvToRGBA)."""
-    uu, vv = u - 128, v - 128
-    y = max(0, yy - 16) * CY
-    r = _sat((y + HALF + CVR * vv) >> SHIFT)
-    g = _sat((y + HALF + CVG * vv + CUG * uu) >> SHIFT)
-    b = _sat((y + HALF + CUB * uu) >> SHIFT)
-    return b, g, r
-
-
-@njit(cache=True, inline="always")
 def _in_range(h, s, v, rng):
     """colour.range_mask on one pixel: rng = (h_lo, s_lo, v_lo, h_hi, s_hi, v_hi), the hue
     range wrapping through red when h_lo > h_hi."""
@@ -95,7 +77,7 @@ def chroma_table(rng):
     for u in range(256):
         for v in range(256):
             for yy in range(16, 256):
-                b, g, r = _yuv_bgr(yy, u, v)
+                b, g, r = i420_bgr(yy, u, v)
                 h, s, val = _hsv(b, g, r, SDIV, HDIV)
                 if _in_range(h, s, val, rng):
                     out[u, v] = 1
@@ -126,7 +108,7 @@ def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols):
                 cx = cols[k]
                 u, v = np.int64(urow[cx]), np.int64(vrow[cx])
                 for x in range(max(2 * cx, x0), min(2 * cx + 2, x1)):
-                    b, g, rr = _yuv_bgr(np.int64(yp[y, x]), u, v)
+                    b, g, rr = i420_bgr(np.int64(yp[y, x]), u, v)
                     h, s, val = _hsv(b, g, rr, SDIV, HDIV)
                     if _in_range(h, s, val, rng):
                         c = x - x0
