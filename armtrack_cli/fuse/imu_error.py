@@ -63,8 +63,8 @@ def forward(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, rk, gate, reacquire, inf
 
 
 def causal_errors(inp, first: np.ndarray, x0: np.ndarray, P0: np.ndarray, proj: Projection,
-                  s: FuseSettings, arm: Arm, passes: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """(δθ (n, 3) rad, b_a (n, 3) m/s²): the filtered estimates at each frame, from ``passes``
+                  s: FuseSettings, arm: Arm, passes: int = 2) -> tuple[np.ndarray, ...]:
+    """(δθ (n, 3) rad, b_a (n, 3) m/s², v (n, 3) m/s): the filtered estimates at each frame, from ``passes``
     forward passes; ``first`` (n, 6) the particle filter's forward (p, v), where the first pass
     is linearised. inp: methods.Inputs with the IMU samples and frame times."""
     imu, t = inp.imu, inp.t
@@ -83,7 +83,7 @@ def causal_errors(inp, first: np.ndarray, x0: np.ndarray, P0: np.ndarray, proj: 
         Hc, zc, Hk, zk = arm_smoother.linearise(X, inp.z, inp.q_WB, proj, arm, arm.shoulder)
         X, _codes = forward(m0, Pm0, F, b, Q, Hc, zc, use_c, s.pixel_sigma**2, Hk, zk,
                             s.constraint_sigma_m**2, gate, int(s.reacquire_frames), infl)
-    return X[:, TH], X[:, BA]
+    return X[:, TH], X[:, BA], X[:, 3:6]
 
 
 def correction(fd: imu_fold.Folded, dtheta: np.ndarray, b_a: np.ndarray) -> tuple[np.ndarray,
