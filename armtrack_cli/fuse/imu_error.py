@@ -15,6 +15,9 @@ the particle filter's own forward estimates, then the previous pass's filtered s
 pass is causal, so the last one is). Detections are gated and re-acquired as fuse/robust.py
 says. ``corrected`` then adds [s]× δθ − R̂ b_a, with the filtered δθ, b_a of frame k−1, to the
 step into frame k: the particle filter runs on it forward, as online the two would side by side.
+The recipe runs ``kalman_passes`` = 8 passes: linearised about a first run that lost the arm, a
+pass stays near it, and each pass linearised about the one before comes back (issue 14,
+docs/fusion.md); the last pass's velocity is also given to the particles (``kalman_velocity``).
 """
 
 from __future__ import annotations
