@@ -274,3 +274,34 @@ def test_pre_roll_reaches_back_over_the_imu_recorded_before_the_video():
     short = FuseSettings(rest_velocity_sd_m_s=0.01, pre_roll_s=0.2)
     assert arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, short)[0] == 6
     assert arm_smoother.pre_roll(imu, tf, z, q[:tf.size], first, FuseSettings())[0] == 0
+
+
+def _matrix_form(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate):
+    """The pass in smoother_kernel's matrix-form steps (_filter_step, _rts_step), run by
+    Python: the arithmetic the in-place passes replaced."""
+    from armtrack_cli.fuse.smoother_kernel import _filter_step, _rts_step
+
+    n = F.shape[0]
+    xs, Ps, gated = np.empty((n, x0.size)), np.empty((n, x0.size, x0.size)), np.zeros(n, bool)
+    x, P = x0.copy(), P0.copy()
+    for k in range(n):
+        x, P, gated[k] = _filter_step.py_func(x, P, F[k], b[k], Q[k], Hc[k], zc[k], use_c[k], rc,
+                                              Hk[k], zk[k], use_k[k], rk, gate, k > 0)
+        xs[k], Ps[k] = x, P
+    for k in range(n - 2, -1, -1):
+        xs[k], Ps[k] = _rts_step.py_func(xs[k], Ps[k], F[k + 1], b[k + 1], Q[k + 1], xs[k + 1],
+                                         Ps[k + 1])
+    return xs, Ps, gated
+
+
+@pytest.mark.parametrize("d", [6, 12, 15])
+def test_in_place_pass_equals_the_matrix_form(d):
+    """The allocation-free kernel (work arrays, loops) against the matrix-form steps, with
+    gated outliers and the arm row: means within 1e-9 m, covariances within 1e-12."""
+    x0, P0, F, b, Q, Hc, zc, use_c, _, Hk, zk, use_k, _ = _linear_problem(
+        np.random.default_rng(d), 400, d, f_scale=0.05, p_camera=0.8, outliers=0.05)
+    args = (x0, P0, F, b, Q, Hc, zc, use_c, 0.3, Hk, zk, use_k, 0.2, 9.0)
+    xs, Ps, gated = smooth(*args)
+    xr, Pr, gr = _matrix_form(*args)
+    assert gr.sum() > 3 and np.array_equal(gated, gr)
+    assert np.abs(xs - xr).max() < 1e-9 and np.abs(Ps - Pr).max() < 1e-12

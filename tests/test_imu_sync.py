@@ -159,3 +159,62 @@ def test_coarse_to_fine_grid_finds_the_full_grids_offset(offset_s, task, seed, m
     monkeypatch.setattr(imu_sync, "COARSE", 1)
     full = estimate_imu_offset(p, search_s=1.0)
     assert fast == full
+
+
+@pytest.mark.parametrize("window, deriv", [(5, 0), (15, 0), (15, 1), (31, 1), (7, 2)])
+def test_savgol_coefficients_are_scipys(window, deriv):
+    from scipy.signal import savgol_coeffs as scipy_coeffs
+
+    from armtrack_cli.core.curves import savgol_coeffs
+
+    want = scipy_coeffs(window, 3, deriv=deriv, delta=1 / 30, use="dot")
+    assert np.allclose(savgol_coeffs(window, deriv, 1 / 30), want, rtol=1e-12, atol=1e-12)
+
+
+def test_hermite_curve_is_scipys():
+    from scipy.interpolate import CubicHermiteSpline
+
+    from armtrack_cli.core.curves import hermite
+
+    rng = np.random.default_rng(5)
+    t = np.cumsum(rng.uniform(0.005, 0.015, 400))
+    y, dydt = rng.standard_normal((400, 3)), rng.standard_normal((400, 3))
+    x = np.r_[rng.uniform(t[0] - 0.02, t[-1] + 0.02, 2000), t]  # inside, at the knots, beyond
+    want = CubicHermiteSpline(t, y, dydt, axis=0)(x)
+    assert np.allclose(hermite(t, y, dydt, x), want, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("span_s", [0.5, 61.0, 600.0])
+def test_bspline_rows_are_scipys_design_matrix(span_s):
+    """The drift's quartic basis (KNOT_S apart) at frame times, the ends included."""
+    from scipy.interpolate import BSpline
+
+    from armtrack_cli.core.curves import bspline_rows
+
+    t = np.arange(0.0, span_s, 1 / 30) + 0.013
+    inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / 6.0)) + 1))
+    knots = np.r_[[inner[0]] * 4, inner, [inner[-1]] * 4]
+    B = BSpline.design_matrix(t, knots, 4).toarray()
+    start, w = bspline_rows(t, knots, 4)
+    mine = np.zeros_like(B)
+    for i in range(5):
+        mine[np.arange(t.size), start + i] = w[:, i]
+    assert np.allclose(mine, B, rtol=0, atol=1e-14)
+
+
+def test_the_offset_check_loads_no_scipy_signal_interpolate_or_optimize(tmp_path):
+    """Its Savitzky–Golay weights, Hermite curve, B-spline rows, grid and bounded search are
+    numpy (core/curves.py, core/grid_search.py, core/bounded_min.py): estimating an offset in
+    a fresh process imports none of those libraries (issue 15: over a second)."""
+    import pickle
+    import subprocess
+    import sys
+
+    (tmp_path / "p.pkl").write_bytes(pickle.dumps(case(0.2, duration=12.0)))
+    code = ("import pickle, sys; from armtrack_cli.fuse.imu_sync import estimate_imu_offset; "
+            f"r = estimate_imu_offset(pickle.load(open({str(tmp_path / 'p.pkl')!r}, 'rb')), "
+            "search_s=0.5); print(round(r.estimate_s, 2), ' '.join(m for m in ('scipy.signal', "
+            "'scipy.interpolate', 'scipy.optimize') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    estimate, *loaded = out.stdout.split()
+    assert abs(float(estimate) - 0.2) < 0.02 and loaded == []

@@ -15,6 +15,7 @@ from armtrack_cli.session.imu import read_imu
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "validation"))
 import mocap_budget  # noqa: E402
+import mocap_rates  # noqa: E402
 
 
 def _truth(path: Path, n: int = 60) -> dict:
@@ -88,6 +89,19 @@ def test_the_prior_is_the_mean_offset_of_the_elbows_sphere(tmp_path):
         (tmp_path / f"T{k}").mkdir()
         (tmp_path / f"T{k}" / "session.toml").write_text(f'[session]\nside = "{side}"\n')
         paths.append(path)
-    sd_c, sd_r, dx, dy, dz, dl = mocap_budget.arm_priors(paths)
+    sd_c, sd_r, dx, dy, dz, dl = mocap_rates.arm_priors(paths)
     assert np.allclose([dx, dy, dz, dl], [0.06, 0.05, -0.06, 0.02], atol=1e-9)
     assert np.isclose(sd_c, 0.01, atol=1e-9) and np.isclose(sd_r, 0.01, atol=1e-9)
+
+
+def test_rest_speed_is_the_median_of_each_trials_still_velocity(tmp_path):
+    """Three trials whose still samples (speed < 2 cm/s) move at ±a per axis (RMS a) and whose
+    moving samples at 10 cm/s: the answer is the median a, the moving samples ignored."""
+    paths = []
+    for k, a in enumerate((0.002, 0.004, 0.009)):
+        still = a * np.where(np.arange(600)[:, None] % 2 == 0, 1.0, -1.0) * np.ones((600, 3))
+        moving = np.tile([0.1, 0.0, 0.0], (200, 1))
+        path = tmp_path / f"T{k}.truth.npz"
+        np.savez(path, wrist_vel=np.vstack([still, moving]))
+        paths.append(path)
+    assert np.isclose(mocap_rates.rest_speed(paths), 0.004, rtol=1e-12)

@@ -89,3 +89,28 @@ def test_before_the_video_the_imu_alone_decides():
     on_video = (tf - 0.15 >= tf[12] - 1e-9) & (tf + 0.15 < 1.02)
     assert found[:12].any() and np.array_equal(found[:12], imu_only[:12])
     assert np.array_equal(found[12:], on_video[12:])
+
+
+def test_the_accelerometer_is_judged_by_its_rms_over_the_window():
+    """A resting hand whose accelerometer shows brief peaks above the threshold (every 10th
+    sample 0.25 m/s² off g: RMS 0.08) is at rest; the same stream with a steady 0.3 m/s²
+    push on [1.5, 2.5) s (the hand starting to move, the gyro quiet) is not where the push
+    fills half the window or more (RMS ≥ 0.3/√2 > 0.15)."""
+    rng = np.random.default_rng(3)
+    t = np.arange(0, 3.0, 0.01)
+    w = 0.003 * rng.standard_normal((t.size, 3))
+    f0 = np.tile([0.0, 0.0, 9.81], (t.size, 1))
+    f = f0.copy()
+    f[::10, 2] += 0.25
+    tf = np.arange(0, 3.0, 1 / 30)
+    z = np.c_[320 + 0 * tf, 240 + 0 * tf]
+    test = rest.RestTest(window_s=0.3)
+    covered = rest.rest_frames(t, f0, w, tf, z, test)  # the same hand without the peaks
+    assert covered[(tf > 0.2) & (tf < 2.8)].all()
+    assert np.array_equal(rest.rest_frames(t, f, w, tf, z, test), covered)
+    f2 = f.copy()
+    f2[(t >= 1.5) & (t < 2.5), 2] += 0.3
+    found = rest.rest_frames(t, f2, w, tf, z, test)
+    assert not found[(tf >= 1.5) & (tf < 2.5)].any()
+    assert np.array_equal(found[(tf + 0.15 < 1.5) | (tf - 0.15 >= 2.5)],
+                          covered[(tf + 0.15 < 1.5) | (tf - 0.15 >= 2.5)])

@@ -91,15 +91,15 @@ def _camera():
 
 @pytest.mark.parametrize("hold", ["sample", "linear"])
 def test_fold_in_chunks_equals_one_chunk(hold, monkeypatch):
-    """imu_fold.fold a few pieces at a time (frames whose pieces straddle chunks included)
-    equals the fold of all pieces at once."""
+    """imu_fold.fold a few frames at a time (each chunk's pieces cut from the IMU's and the
+    frames' times afresh) equals the fold of all pieces at once."""
     rng = np.random.default_rng(2)
     t = np.arange(0, 5, 0.01) + 0.003
     q = quat.normalize(np.array([1.0, 0.2, 0, 0]) + 0.1 * rng.standard_normal((t.size, 4)))
     f = rng.standard_normal((t.size, 3)) + [0, 0, 9.81]
     tf = np.arange(0.1, 4.9, 1 / 30)
     whole = imu_fold.fold(t, q, f, tf, hold=hold)
-    monkeypatch.setattr(imu_fold, "FOLD_CHUNK", 7)
+    monkeypatch.setattr(imu_fold, "FOLD_FRAMES", 7)
     parts = imu_fold.fold(t, q, f, tf, hold=hold)
     for name in ("dp", "dv", "A_p", "A_v", "B_p", "B_v"):
         assert np.abs(getattr(parts, name) - getattr(whole, name)).max() < 1e-14, name

@@ -21,6 +21,7 @@ import numpy as np
 
 from armtrack_cli.compare.errors import truth_at
 from armtrack_cli.core.bounded_min import bounded_min
+from armtrack_cli.core.grid_search import coarse_to_fine
 
 MIN_OVERLAP = 0.5  # share of the estimate's frames that must meet the shifted truth
 COARSE = 5  # the coarse pass tries every 5th offset of the grid (0.05 s at 100 Hz) …
@@ -66,18 +67,8 @@ def _grid_costs(grid, t, est, truth_t, truth_xyz, rate_hz, rays) -> np.ndarray:
         return _cost(d, t[::k], e, truth_t, truth_xyz, rate_hz, n,
                      None if rays is None else rays[::k])
 
-    coarse = np.arange(0, grid.size, COARSE)
-    rough = np.array([cost(grid[i], DECIMATE) for i in coarse])
-    costs = np.full(grid.size, np.inf)
-    if not np.isfinite(rough).any():
-        return np.array([cost(d) for d in grid])
-    inner = np.r_[np.inf, rough, np.inf]
-    dips = np.flatnonzero((rough <= inner[:-2]) & (rough <= inner[2:]) & np.isfinite(rough))
-    for i in coarse[dips[np.argsort(rough[dips])][:REFINE]]:
-        for j in range(max(i - COARSE, 0), min(i + COARSE + 1, grid.size)):
-            if not np.isfinite(costs[j]):
-                costs[j] = cost(grid[j])
-    return costs
+    return coarse_to_fine(grid.size, lambda i: cost(grid[i]), every=COARSE, radius=COARSE,
+                          basins=REFINE, rough=lambda i: cost(grid[i], DECIMATE))
 
 
 def estimate_offset(t: np.ndarray, est: np.ndarray, truth_t: np.ndarray, truth_xyz: np.ndarray,

@@ -54,9 +54,9 @@ class ImuSamples:
 @dataclass(frozen=True)
 class Smoothed:
     x: np.ndarray  # (n, d) smoothed state
-    P: np.ndarray  # (n, 6, 6) the (p, v) block of the covariance
+    var: np.ndarray  # (n, 6) the variances of (p, v): all a trajectory reports of them
     q_WB: np.ndarray  # (n, 4) the corrected orientation R = exp(−[δθ]×) R̂
-    elbow_cov: np.ndarray  # (n, 3, 3)
+    elbow_var: np.ndarray  # (n, 3) the elbow's variances
     gated: np.ndarray  # (n,) bool, detections not used
     iterations: int
     gyro: bool  # δθ tracked by the gyroscope (state holds b_g) or Gauss–Markov
@@ -249,10 +249,10 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
     still = resting(imu, t_frames, z, s, m_pre)
-    X, P_pv, elbow_cov, gated, iterations = _iterate(fd, track, period, (m0, Pm0), X, z, q_hat,
-                                                     proj, s, arm, shoulder, use_c, use_k, still)
+    X, var, elbow_var, gated, iterations = _iterate(fd, track, period, (m0, Pm0), X, z, q_hat,
+                                                    proj, s, arm, shoulder, use_c, use_k, still)
     X, q_hat = X[m_pre:], q_hat[m_pre:]  # the video's frames
-    return Smoothed(X, P_pv[m_pre:], corrected(q_hat, X[:, TH]), elbow_cov[m_pre:],
+    return Smoothed(X, var[m_pre:], corrected(q_hat, X[:, TH]), elbow_var[m_pre:],
                     gated[m_pre:], iterations, gyro)
 
 
@@ -261,12 +261,13 @@ def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use
     """run()'s Gauss–Newton iterations, each a checkpointed pass (fuse/smoother_blocks.py:
     equal to the plain pass, memory flat in the session's length): the model built a block of
     frames at a time, with the zero-velocity rows of its resting frames (``still``,
-    fuse/rest.py) inserted, and only the (p, v) and elbow covariances kept. Returns X, the
-    (p, v) and elbow covariances, the gated detections and the iterations run."""
+    fuse/rest.py) inserted, and only the (p, v) and elbow variances kept (a covariance per
+    frame would be 0.4 KB of every frame's 0.6 KB). Returns X, the (p, v) and elbow
+    variances, the gated detections and the iterations run."""
     n = X.shape[0]
     sh_fixed = None if shoulder is not None else arm.shoulder
     rk = s.constraint_sigma_m**2
-    P_pv, elbow_cov = np.empty((n, 6, 6)), np.empty((n, 3, 3))
+    var, elbow_var = np.empty((n, 6)), np.empty((n, 3))
     iterations, step, gated = 0, np.inf, np.zeros(n, bool)
     while iterations < s.smoother_iterations and step >= STEP_TOL_M:
         Xn = np.empty_like(X)
@@ -282,15 +283,15 @@ def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use
             return (*ins.arrays, ins.real)
 
         def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, Xn=Xn) -> None:
-            Xn[lo:hi], P_pv[lo:hi] = xs, Ps[:, :6, :6]
-            elbow_cov[lo:hi] = _elbow_cov(q_hat[lo:hi], xs, Ps, arm)
+            Xn[lo:hi], var[lo:hi] = xs, np.diagonal(Ps[:, :6, :6], axis1=1, axis2=2)
+            elbow_var[lo:hi] = np.diagonal(_elbow_cov(q_hat[lo:hi], xs, Ps, arm), axis1=1, axis2=2)
 
         gated = smooth_blocked(*prior_, model, n, rc=s.pixel_sigma**2, rk=rk,
                                gate=float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf,  # 0: off
                                keep=keep)
         step = np.abs(Xn[:, P_] - X[:, P_]).max()
         X, iterations = Xn, iterations + 1
-    return X, P_pv, elbow_cov, gated, iterations
+    return X, var, elbow_var, gated, iterations
 
 
 def _rows(a, lo: int, hi: int):

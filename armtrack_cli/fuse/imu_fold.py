@@ -35,7 +35,8 @@ from armtrack_cli.fuse.gyro_orientation import gyro_steps
 from armtrack_cli.fuse.models import GRAVITY_W
 from armtrack_cli.fuse.settings import HOLDS
 
-FOLD_CHUNK = 8192  # pieces folded at once: memory bounded however long the session
+FOLD_CHUNK = 8192  # IMU intervals summed at once: memory bounded however long the session
+FOLD_FRAMES = 2048  # frames folded at once (their pieces: ~4 per frame at 100 Hz and 30 fps)
 
 
 @dataclass(frozen=True)
@@ -68,12 +69,17 @@ def skew(v: np.ndarray) -> np.ndarray:
                      np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
 
 
-def _segments(t_imu: np.ndarray, t_frames: np.ndarray, hold: str):
-    """Every piece [s0, s1) between consecutive IMU-sample and frame times, in time order:
-    its frame k, and for the two samples (j, j1) its acceleration depends on, the weights on
-    ∫ a dt (wv, wv1) and on ∫ a (t_k − t) dt (wp, wp1)."""
-    brk = np.union1d(t_imu, t_frames)
-    brk = brk[(brk >= t_frames[0]) & (brk <= t_frames[-1])]
+def _segments(t_imu: np.ndarray, t_frames: np.ndarray, hold: str, a: int = 0,
+              b: int | None = None):
+    """Every piece [s0, s1) between consecutive IMU-sample and frame times from frame a to
+    frame b (default: the last), in time order: its frame k, and for the two samples (j, j1)
+    its acceleration depends on, the weights on ∫ a dt (wv, wv1) and on ∫ a (t_k − t) dt
+    (wp, wp1). Each piece's numbers are its own: the pieces of frames a … b are those of the
+    whole span that fall there, whatever span is asked."""
+    b = t_frames.size - 1 if b is None else b
+    lo, hi = np.searchsorted(t_imu, [t_frames[a], t_frames[b]], side="left")
+    brk = np.union1d(t_imu[lo:hi], t_frames[a:b + 1])
+    brk = brk[(brk >= t_frames[a]) & (brk <= t_frames[b])]
     s0, s1 = brk[:-1], brk[1:]
     last = t_imu.size - 1
     j = np.clip(np.searchsorted(t_imu, s0, side="right") - 1, 0, last)  # sample at or before s0
@@ -103,21 +109,21 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
     t_frames (n,) s, all on the session clock."""
     if hold not in HOLDS:
         raise ValueError(f"unknown hold {hold!r}; holds are {', '.join(HOLDS)}")
-    k, (j, j1), (wv, wv1), (wp, wp1) = _segments(t_imu, t_frames, hold)
     n = t_frames.size
     acc_v, acc_p = np.zeros((n, 3, 7)), np.zeros((n, 3, 7))
-    for a in range(0, k.size, FOLD_CHUNK):  # pieces in time order, a chunk at a time
-        c = slice(a, a + FOLD_CHUNK)
-        lo, hi = j[c][0], j1[c][-1] + 1  # the samples this chunk's pieces use
+    for a in range(0, n - 1, FOLD_FRAMES):  # the pieces of a chunk of frames at a time: the
+        # temporaries (a dozen arrays per piece) bounded however long the session
+        k, (j, j1), (wv, wv1), (wp, wp1) = _segments(t_imu, t_frames, hold, a,
+                                                     min(a + FOLD_FRAMES, n - 1))
+        lo, hi = j[0], j1[-1] + 1  # the samples this chunk's pieces use
         R = quat.to_matrix(q_WB[lo:hi])  # R̂_WB
         s = np.einsum("mij,mj->mi", R, f_B[lo:hi])  # specific force in W
         per_sample = np.concatenate([(s + GRAVITY_W)[:, :, None], skew(s), R], axis=2)
-        kc = k[c]
-        first = np.flatnonzero(np.r_[True, np.diff(kc) > 0])  # k sorted: each frame's pieces
+        first = np.flatnonzero(np.r_[True, np.diff(k) > 0])  # k sorted: each frame's pieces
         for acc, w0, w1 in ((acc_v, wv, wv1), (acc_p, wp, wp1)):
-            piece = (w0[c, None, None] * per_sample[j[c] - lo]
-                     + w1[c, None, None] * per_sample[j1[c] - lo])
-            acc[kc[first]] += np.add.reduceat(piece, first, axis=0)  # a frame may span chunks
+            piece = (w0[:, None, None] * per_sample[j - lo]
+                     + w1[:, None, None] * per_sample[j1 - lo])
+            acc[k[first]] += np.add.reduceat(piece, first, axis=0)  # a frame's pieces at once
     dt = np.r_[0.0, np.diff(t_frames)]
     return Folded(dt, acc_p[:, :, 0], acc_v[:, :, 0], acc_p[:, :, 1:4], acc_v[:, :, 1:4],
                   acc_p[:, :, 4:7], acc_v[:, :, 4:7])
@@ -125,38 +131,67 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
 
 def _at(t_src: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:
     """y (M, ...) linearly interpolated at times t (inside t_src)."""
+    return _streamed_at(t_src, t, [(0, t_src.size - 1, y)], y.shape[1:])
+
+
+def _streamed_at(t_src: np.ndarray, t: np.ndarray, chunks, shape: tuple) -> np.ndarray:
+    """_at of a y (M, *shape) given as ``chunks``: (a, b, rows a … b of y), consecutive
+    chunks sharing their end row; y is never held whole. t (n,) sorted, inside t_src."""
     i = np.clip(np.searchsorted(t_src, t, side="right"), 1, t_src.size - 1)
-    f = ((t - t_src[i - 1]) / (t_src[i] - t_src[i - 1])).reshape((-1,) + (1,) * (y.ndim - 1))
-    return y[i - 1] * (1 - f) + y[i] * f
+    f = ((t - t_src[i - 1]) / (t_src[i] - t_src[i - 1])).reshape((-1,) + (1,) * len(shape))
+    out = np.empty((t.size,) + tuple(shape))
+    for a, b, y in chunks:  # the times whose two neighbours are rows a … b
+        lo, hi = np.searchsorted(i, [a + 1, b + 1], side="left")
+        ii = i[lo:hi] - a
+        out[lo:hi] = y[ii - 1] * (1 - f[lo:hi]) + y[ii] * f[lo:hi]
+    return out
+
+
+def _running_sums(t_imu: np.ndarray, step):
+    """Chunks (a, b, rows a … b) of the running sum over IMU intervals of ``step(a, b)``
+    (the b − a intervals from sample a, a (b − a, ...) array), zero at the first sample; the
+    sum continued from each chunk's end: the same additions in the same order as one cumsum
+    over the whole recording."""
+    carry = None
+    for a in range(0, t_imu.size - 1, FOLD_CHUNK):
+        b = min(a + FOLD_CHUNK, t_imu.size - 1)
+        st = step(a, b)
+        carry = np.zeros((1,) + st.shape[1:]) if carry is None else carry
+        rows = np.cumsum(np.concatenate([carry, st]), axis=0)
+        yield a, b, rows
+        carry = rows[-1:]
+
+
+def _rotation_steps(t_imu: np.ndarray, q_WB: np.ndarray):
+    """step(a, b) of ∫R_WB dt: the trapezoid over each interval from sample a to b."""
+    def step(a: int, b: int) -> np.ndarray:
+        R = quat.to_matrix(q_WB[a:b + 1])
+        return 0.5 * (R[1:] + R[:-1]) * np.diff(t_imu[a:b + 1])[:, None, None]
+    return step
 
 
 def rotation_integral(t_imu: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
     """(M, 3, 3) s: ∫R_WB dt from the first IMU sample (trapezoidal), what a constant vector
     in B (a bias) integrates to in W."""
     out = np.zeros((t_imu.size, 3, 3))
-    for a in range(0, t_imu.size - 1, FOLD_CHUNK):  # a chunk of intervals at a time: the
-        b = min(a + FOLD_CHUNK, t_imu.size - 1)  # temporaries bounded however long the session
-        R = quat.to_matrix(q_WB[a:b + 1])
-        step = 0.5 * (R[1:] + R[:-1]) * np.diff(t_imu[a:b + 1])[:, None, None]
-        # the running sum continued from the last chunk's end: the same additions in the
-        # same order as one cumsum over the whole recording
-        out[a + 1:b + 1] = np.cumsum(np.concatenate([out[a:a + 1], step]), axis=0)[1:]
+    for a, b, rows in _running_sums(t_imu, _rotation_steps(t_imu, q_WB)):
+        out[a:b + 1] = rows
     return out
 
 
 def orientation_track(t_imu: np.ndarray, q_WB: np.ndarray, w_B: np.ndarray,
                       t_frames: np.ndarray) -> OrientationTrack:
     """The orientation error's change between frames t_frames (n,) from the IMU's output
-    orientation q_WB (M, 4) and gyro w_B (M, 3) rad/s at t_imu (M,) s (module docstring)."""
-    cum = np.zeros((t_imu.size, 3))  # Σ rotvec(D_j), a chunk of intervals at a time
-    for a in range(0, t_imu.size - 1, FOLD_CHUNK):
-        b = min(a + FOLD_CHUNK, t_imu.size - 1)
+    orientation q_WB (M, 4) and gyro w_B (M, 3) rad/s at t_imu (M,) s (module docstring).
+    The running sums over the IMU's samples are taken at the frames a chunk of samples at a
+    time, never held whole (a 60-minute session's ∫R dt alone is 26 MB)."""
+    def rotvec_steps(a: int, b: int) -> np.ndarray:  # Σ rotvec(D_j)'s terms
         dq = gyro_steps(t_imu[a:b + 1], w_B[a:b + 1])  # the body's rotation over each interval
         D = quat.multiply(quat.multiply(q_WB[a + 1:b + 1], quat.conjugate(dq)),
                           quat.conjugate(q_WB[a:b]))
-        cum[a + 1:b + 1] = np.cumsum(np.concatenate([cum[a:a + 1], quat.to_rotvec(D)]),
-                                     axis=0)[1:]  # continued: one cumsum's additions
-    cum_G = rotation_integral(t_imu, q_WB)
-    c, G = _at(t_imu, cum, t_frames), _at(t_imu, cum_G, t_frames)
+        return quat.to_rotvec(D)
+
+    c = _streamed_at(t_imu, t_frames, _running_sums(t_imu, rotvec_steps), (3,))
+    G = _streamed_at(t_imu, t_frames, _running_sums(t_imu, _rotation_steps(t_imu, q_WB)), (3, 3))
     return OrientationTrack(np.concatenate([np.zeros((1, 3)), np.diff(c, axis=0)]),
                             np.concatenate([np.zeros((1, 3, 3)), np.diff(G, axis=0)]))

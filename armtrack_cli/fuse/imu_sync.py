@@ -36,6 +36,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from armtrack_cli.core.bounded_min import bounded_min
+from armtrack_cli.core.curves import bspline_rows, hermite, savgol_coeffs
+from armtrack_cli.core.grid_search import coarse_to_fine
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
     RIDGE,
@@ -85,9 +88,7 @@ class SyncProblem:
 def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
     """Cubic Savitzky–Golay along axis 0 (odd ``window``); NaN wherever the window holds a NaN
     or runs off either end."""
-    from scipy.signal import savgol_coeffs
-
-    c = savgol_coeffs(window, 3, deriv=deriv, delta=dt, use="dot")
+    c = savgol_coeffs(window, deriv, dt)
     h = window // 2
     out = np.full(x.shape, np.nan)
     if x.shape[0] < window:
@@ -106,7 +107,8 @@ class _Prepared:
     J: np.ndarray  # (n, 2, 3) px/m
     drift: SplineRows  # (n, m) the drift's spline basis at the frames
     rint: np.ndarray  # (M, 3, 3) s: ∫R_WB dt on the IMU's clock (a bias in B's velocity)
-    v_imu: object  # t -> (…, 3) m/s, ∫ a_W dt on the IMU's clock: cubic Hermite (dv/dt = a_W)
+    v_imu: np.ndarray  # (M, 3) m/s, ∫ a_W dt at the IMU's samples (trapezoidal); between
+    #                    them the cubic Hermite curve with dv/dt = a_W (``hermite``)
     dt: float  # frame period, s
     window: int
 
@@ -114,8 +116,6 @@ class _Prepared:
 def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Prepared:
     """The fit's parts at δ; given ``like`` (another δ's), only the Jacobians (the rays'
     depths move with δ), the rest shared with it: one copy of the per-sample arrays."""
-    from scipy.interpolate import CubicHermiteSpline  # imported where used (issue 15)
-
     J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
     if like is not None:
         return replace(like, J=J)
@@ -126,7 +126,7 @@ def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Pr
                                                    * np.diff(p.t_imu)[:, None], axis=0)])
     return _Prepared(_savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 1, dt), J, drift,
                      rotation_integral(p.t_imu, p.q_WB),
-                     CubicHermiteSpline(p.t_imu, v_imu, p.a_W, axis=0), dt, window)
+                     v_imu, dt, window)
 
 
 def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
@@ -205,15 +205,13 @@ def _bridge(x: np.ndarray, most: int) -> np.ndarray:
 def _spline_basis(t: np.ndarray) -> SplineRows:
     """(n, m) quartic B-splines, knots KNOT_S apart over t: the integrals of cubic splines
     (plus a constant), i.e. the velocity drift of a smoothly varying acceleration error."""
-    from scipy.interpolate import BSpline
-
     k = DRIFT_DEGREE
     inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / KNOT_S)) + 1))
     knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
     # k + 1 non-zeros a row, kept as such (fuse/drift_ls.py): dense, a 60-minute session's
     # basis would be 1.6 GB
-    return SplineRows.from_csr(
-        BSpline.design_matrix(np.clip(t, inner[0], inner[-1]), knots, k).tocsr(), k + 1)
+    start, w = bspline_rows(np.clip(t, inner[0], inner[-1]), knots, k)
+    return SplineRows(start, w, knots.size - k - 1)
 
 
 def _fill(x: np.ndarray) -> np.ndarray:
@@ -230,7 +228,7 @@ def predicted(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
     t = p.t_frames - delta
     j = np.clip(np.searchsorted(p.t_imu, t, side="right"), 1, p.t_imu.size - 1)
     t0, t1 = p.t_imu[j - 1], p.t_imu[j]
-    v = pre.v_imu(t)
+    v = hermite(p.t_imu, pre.v_imu, p.a_W, t)
     v[(t < p.t_imu[0]) | (t > p.t_imu[-1]) | (t1 - t0 > GAP_S)] = np.nan
     return _savgol(np.einsum("kij,kj->ki", pre.J, v), pre.window, 0, pre.dt)
 
@@ -347,32 +345,22 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
 def _grid_costs(grid: np.ndarray, p: SyncProblem, pre: _Prepared, n_img: int) -> np.ndarray:
     """The cost at every COARSE-th δ of the grid, then at each δ within COARSE − 1 of the
     best of those (coarse to fine: the basin is many frames wide); inf where not evaluated."""
-    costs = np.full(grid.size, np.inf)
     cache: dict = {}  # the grid's normal equations: the refinements keep their own
-    coarse = np.unique(np.r_[np.arange(0, grid.size, COARSE), grid.size - 1])
-    for i in coarse:
-        costs[i] = cost(grid[i], p, pre, n_img, cache)
-    if np.isfinite(costs).any():
-        best = int(np.argmin(costs))
-        for i in range(max(best - COARSE + 1, 0), min(best + COARSE, grid.size)):
-            if i not in coarse:
-                costs[i] = cost(grid[i], p, pre, n_img, cache)
-    return costs
+    return coarse_to_fine(grid.size, lambda i: cost(grid[i], p, pre, n_img, cache),
+                          every=COARSE, radius=COARSE - 1, with_last=True)
 
 
 def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
             ) -> tuple[float, float]:
     """The cost's minimum within d0 ± REFINE_FRAMES periods, on the frames all of it scores:
     (δ, cost)."""
-    from scipy.optimize import minimize_scalar
-
     lo, hi = d0 - REFINE_FRAMES * step, d0 + REFINE_FRAMES * step
     frames = _mask(p, pre, lo)[1] & _mask(p, pre, d0)[1] & _mask(p, pre, hi)[1]
     cache: dict = {}
     c0 = cost(d0, p, pre, n_img, cache, frames)
-    res = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
-                          args=(p, pre, n_img, cache, frames), options={"xatol": 1e-5})
-    return (float(res.x), float(res.fun)) if res.fun <= c0 else (d0, c0)
+    x, fun = bounded_min(lambda d: cost(d, p, pre, n_img, cache, frames), lo, hi,
+                         xatol=1e-5)  # scipy's bounded minimize_scalar, step for step
+    return (float(x), float(fun)) if fun <= c0 else (d0, c0)
 
 
 def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:

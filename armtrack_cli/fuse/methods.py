@@ -35,16 +35,18 @@ class Inputs:
 @dataclass(frozen=True)
 class Estimates:
     mean: np.ndarray  # (n_frames, 6) wrist position and velocity
-    cov: np.ndarray  # (n_frames, 6, 6)
+    cov: np.ndarray | None  # (n_frames, 6, 6); None where the method keeps ``var`` alone
     ess: np.ndarray | None  # (n_frames,) particle filters only
     codes: np.ndarray | None = None  # (n_frames,) what became of each detection (robust.USED…)
     q_WB: np.ndarray | None = None  # (n_frames, 4) orientation corrected by the method, if any
-    elbow_cov: np.ndarray | None = None  # (n_frames, 3, 3) where the method estimates it
+    elbow_var: np.ndarray | None = None  # (n_frames, 3) where the method estimates it
     summary: dict | None = None  # what the method adds to fuse's summary
+    var: np.ndarray | None = None  # (n_frames, 6) cov's diagonal, where cov is not kept
 
     @property
     def sd(self) -> np.ndarray:
-        return np.sqrt(np.maximum(np.diagonal(self.cov, axis1=1, axis2=2), 0.0))
+        var = np.diagonal(self.cov, axis1=1, axis2=2) if self.var is None else self.var
+        return np.sqrt(np.maximum(var, 0.0))
 
 
 def _z(inp: Inputs, k: int) -> np.ndarray | None:
@@ -308,8 +310,9 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
-            return run_arm_smoother(inp, x0, P0, proj, s, arm,  # the means alone
-                                    smooth(est, inp, s, "pf-constraint", means_only=True).mean)
+            first = smooth(est, inp, s, "pf-constraint", means_only=True).mean  # the means alone
+            del est  # its (n, 6, 6) covariances, not held through the smoother (issue 15)
+            return run_arm_smoother(inp, x0, P0, proj, s, arm, first)
     else:
         raise ValueError(f"unknown method {method!r}")
     if s.smoother == "rts":
@@ -375,8 +378,8 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         summary["upper_arm_change_m"] = [round(float(v), 4) for v in (ell.min(), ell.max())]
     if s.rest_velocity_sd_m_s > 0:
         summary["frames_at_rest"] = int(arm_smoother.resting(inp.imu, inp.t, inp.z, s).sum())
-    return Estimates(r.x[:, :6], r.P[:, :6, :6], None, q_WB=r.q_WB, elbow_cov=r.elbow_cov,
-                     summary=summary)
+    return Estimates(r.x[:, :6], None, None, q_WB=r.q_WB, elbow_var=r.elbow_var,
+                     summary=summary, var=r.var)
 
 
 def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str, *,

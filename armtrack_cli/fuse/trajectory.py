@@ -32,9 +32,9 @@ def trajectory_table(t_frames: np.ndarray, frames: np.ndarray, est: Estimates, i
         cols[f"wrist_{a}_sd"] = sd[:, k]
     if arm is not None:  # the elbow is the wrist moved by a known vector: the same spread,
         esd = sd[:, :3]  # unless the method estimates the orientation too
-        if est.elbow_cov is not None:
+        if est.elbow_var is not None:
             esd = full(est.sd[:, :3])
-            esd[frames] = np.sqrt(np.maximum(np.diagonal(est.elbow_cov, axis1=1, axis2=2), 0))
+            esd[frames] = np.sqrt(np.maximum(est.elbow_var, 0))
         for k, a in enumerate("xyz"):
             cols[f"elbow_{a}_sd"] = esd[:, k]
     for k, a in enumerate("xyz"):

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+GRID_MAX = 200_000  # peaks × samples up to which prominences are found on one grid
+
 
 def local_maxima(x: np.ndarray) -> np.ndarray:
     """Indices of the samples above both neighbours; a flat top (a run of equal samples with
@@ -55,9 +57,24 @@ def _side_min(x: np.ndarray, p: int, step: int) -> float:
 
 def prominences(x: np.ndarray, peaks: np.ndarray) -> np.ndarray:
     """Each peak's height above the higher of the lowest points to its left and right, each
-    searched up to the first sample higher than the peak."""
-    return np.array([x[p] - max(_side_min(x, p, -1), _side_min(x, p, 1)) for p in peaks],
-                    float)
+    searched up to the first sample higher than the peak. All peaks at once on a (peaks,
+    samples) grid when that is small (a segment's: the same samples' minimum, so the same
+    values), else one peak at a time."""
+    if peaks.size * x.size > GRID_MAX:
+        return np.array([x[p] - max(_side_min(x, p, -1), _side_min(x, p, 1)) for p in peaks],
+                        float)
+    i = np.arange(x.size)
+    top = x[peaks][:, None]
+    higher = x[None, :] > top  # (k, n)
+    left, right = higher & (i < peaks[:, None]), higher & (i > peaks[:, None])
+    # the first sample of each side's run: after the last higher one left, before the first
+    # higher one right (or the ends)
+    lo = np.where(left.any(axis=1), x.size - 1 - np.argmax(left[:, ::-1], axis=1) + 1, 0)
+    hi = np.where(right.any(axis=1), np.argmax(right, axis=1), x.size)
+    xs = np.broadcast_to(x, higher.shape)
+    lmin = np.where((i >= lo[:, None]) & (i <= peaks[:, None]), xs, np.inf).min(axis=1)
+    rmin = np.where((i >= peaks[:, None]) & (i < hi[:, None]), xs, np.inf).min(axis=1)
+    return x[peaks] - np.maximum(lmin, rmin)
 
 
 def find_peaks(x: np.ndarray, *, prominence: float, distance: int) -> np.ndarray:

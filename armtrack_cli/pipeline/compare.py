@@ -91,7 +91,6 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     trajs = {m: trajectory_columns(work / f"trajectory-{m}.csv") for m in methods}
     truth, offset = synchronised_truth(session, trajs, eye=_camera_centre(work.path))
     rows, mrows, excluded = [], [], {}
-    for_measures = denoised(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
     for m, traj in trajs.items():
         t = traj["t"]
         if truth.t[0] > t[-1] or truth.t[-1] < t[0]:
@@ -103,10 +102,13 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
                if f"{j}_x" in traj}
         s = score(m, t, est, truth)
         rows += s.rows
+        excluded.update(s.excluded)
+    for_measures = denoised(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
+    del truth  # scored: from here one copy of the markers is held, not two (issue 15)
+    for m, traj in trajs.items():
         mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"),
                                     truth_inputs(trajectory_inputs(traj, session), session,
-                                                 truth_markers(t, for_measures)))
-        excluded.update(s.excluded)
+                                                 truth_markers(traj["t"], for_measures)))
     with output_set():
         write_rows(work / "errors.csv", rows, columns=COLUMNS, command="compare",
                    settings={"methods": list(methods), "excluded_frames": excluded,

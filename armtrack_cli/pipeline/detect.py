@@ -8,14 +8,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from armtrack_cli.core.errors import ConfigError
 from armtrack_cli.detect.palm_blobs import CENTROIDS, PalmBlobDetector, PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings, PatchTracker
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.session.column_csv import write_columns
 from armtrack_cli.session.config import load_session, require
-from armtrack_cli.session.outputs import output_set, write_table
+from armtrack_cli.session.outputs import output_set
 from armtrack_cli.session.recipe import section
 from armtrack_cli.session.video import iter_frames_ahead, probe_video
 
@@ -37,15 +37,14 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
         det.warm()
         setup = time.perf_counter() - setup
         start += setup
-        found = []  # (frame, t, (k, 4) blobs): one array a frame, no Python object a blob
+        found = _Blobs()
         for i, t, img in iter_frames_ahead(video):
             if len(b := det.detect(img)):
-                found.append((i, t, b))
+                found.add(i, t, b)
             if on_frame:
                 on_frame(i + 1)
-        table = _blob_table(found)
-        summary = {"blobs": len(table), "frames_with_6_or_more": sum(
-            len(b) >= 6 for _, _, b in found),
+        table = found.table()
+        summary = {"blobs": found.k, "frames_with_6_or_more": found.frames_6,
                    "frames_searched_whole": det.full_searches, "kernel_setup_s": round(setup, 3)}
     else:
         if session.camera.patch is None:
@@ -59,9 +58,9 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
             if on_frame:
                 on_frame(i + 1)
         d = tracker.detections(video.fps)
-        table = pd.DataFrame({"frame": np.arange(d.shape[0]), "t": video.t[:d.shape[0]],
-                              "u": d[:, 0], "v": d[:, 1], "ok": d[:, 5].astype(int),
-                              "width": d[:, 2], "height": d[:, 3], "angle": d[:, 4]})
+        table = {"frame": np.arange(d.shape[0]), "t": video.t[:d.shape[0]], "u": d[:, 0],
+                 "v": d[:, 1], "ok": d[:, 5].astype(int), "width": d[:, 2], "height": d[:, 3],
+                 "angle": d[:, 4]}  # columns, written block by block: no DataFrame, no text
         ok = d[:, 5] == 1
         lost = np.flatnonzero(np.diff(np.r_[0, (~ok).astype(int), 0]) != 0).reshape(-1, 2)
         summary = {"ok_frames": int(ok.sum()), "lost_spans": len(lost),
@@ -70,19 +69,36 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
     elapsed = time.perf_counter() - start
     dest = out_dir(session, out)
     with output_set():
-        write_table(dest / "detections.csv", table, command="detect",
+        write_columns(dest / "detections.csv", table, command="detect",
                     settings={"recipe": where, **dataclasses.asdict(settings)})
     return {"detections": str(dest / "detections.csv"), "frames": video.n_frames,
             "seconds": round(elapsed, 3), "frames_per_s": round(video.n_frames / elapsed, 1),
             "kind": "palm" if session.palm is not None else "patch", **summary}
 
 
-def _blob_table(found: list[tuple[int, float, np.ndarray]]) -> pd.DataFrame:
-    """detections.csv's rows (frame, t, blob, u, v, area, score) from each frame's blobs."""
-    n = np.array([len(b) for _, _, b in found], dtype=np.int64)
-    b = np.concatenate([b for _, _, b in found]) if found else np.zeros((0, 4))
-    return pd.DataFrame({
-        "frame": np.repeat(np.array([i for i, _, _ in found], dtype=np.int64), n),
-        "t": np.repeat(np.array([t for _, t, _ in found], dtype=float), n),
-        "blob": np.arange(len(b)) - np.repeat(np.cumsum(n) - n, n),
-        "u": b[:, 0], "v": b[:, 1], "area": b[:, 2].astype(np.int64), "score": b[:, 3]})
+class _Blobs:
+    """Every frame's blobs in one growing (K, 6) array, rows (frame, t, u, v, area, score):
+    no Python object kept a frame, so a long session's bookkeeping is its numbers (issue 15)."""
+
+    def __init__(self) -> None:
+        self.rows, self.k, self.frames_6 = np.empty((4096, 6)), 0, 0
+
+    def add(self, frame: int, t: float, blobs: np.ndarray) -> None:
+        """blobs (m, 4): u, v, area, score of one frame's blobs."""
+        k, m = self.k, len(blobs)
+        if k + m > len(self.rows):  # doubling: a copy now and then, amortised
+            grown = np.empty((max(k + m, 2 * len(self.rows)), 6))
+            grown[:k] = self.rows[:k]
+            self.rows = grown
+        self.rows[k:k + m, 0], self.rows[k:k + m, 1], self.rows[k:k + m, 2:] = frame, t, blobs
+        self.k += m
+        self.frames_6 += m >= 6
+
+    def table(self) -> dict[str, np.ndarray]:
+        """detections.csv's columns (frame, t, blob, u, v, area, score)."""
+        r = self.rows[:self.k]
+        frame = r[:, 0].astype(np.int64)
+        starts = np.flatnonzero(np.r_[True, frame[1:] != frame[:-1]]) if len(r) else np.zeros(0, int)
+        blob = np.arange(len(r)) - np.repeat(starts, np.diff(np.r_[starts, len(r)]))
+        return {"frame": frame, "t": r[:, 1].copy(), "blob": blob, "u": r[:, 2].copy(),
+                "v": r[:, 3].copy(), "area": r[:, 4].astype(np.int64), "score": r[:, 5].copy()}

@@ -54,8 +54,9 @@ class Prepared:
     projection: models.Projection
     arm: models.Arm | None
     imu_offset: dict  # [sync] imu_offset_s: value, and its estimate and SD (imu_offset.py)
-    q_anchored: np.ndarray  # (M, 4) inputs.imu's orientations with their wandering error
-    #                         replaced by a constant one (fuse/gyro_orientation.py)
+    q_anchored: np.ndarray | None  # (M, 4) inputs.imu's orientations with their wandering
+    #                  error replaced by a constant one (fuse/gyro_orientation.py), for the
+    #                  arm estimate ([arm] "auto"); None once that is done
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
@@ -75,7 +76,6 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
     ok = slice(None) if ok.all() else ok  # every sample usable: views, not copies
     q_imu = imu.quat[ok]
-    a_w = models.accel_world(q_imu, imu.acc[ok])  # Tao & Hu eq. 4
     arm = None
     if session.arm is not None:
         arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
@@ -86,6 +86,8 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_anch,
                                      models.accel_world(q_anch, imu.acc[ok]), t_f, uv, proj, known)
     t_imu = imu.t[ok] + offset  # session time = stream time + offset
+    a_w = models.accel_world(q_imu, imu.acc[ok])  # Tao & Hu eq. 4; after the offset check,
+    #                                               whose own arrays peak (issue 15)
     # frames inside the IMU's span, starting at the first detection
     inside = (t_f >= t_imu[0]) & (t_f <= t_imu[-1])
     det = inside & np.isfinite(uv).all(axis=1)
@@ -126,6 +128,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         session = arm_model.with_arm(session, auto.shoulder, auto.upper_arm_m, auto.forearm_m)
         p = dataclasses.replace(p, arm=dataclasses.replace(
             p.arm, shoulder=auto.shoulder, L1=auto.upper_arm_m, L2=auto.forearm_m))
+    p = dataclasses.replace(p, q_anchored=None)  # the arm estimate's alone: not held on
     inp = p.inputs
     if p.arm is not None:
         miss = models.ray_misses_arm(p.projection, inp.z[0], p.arm, inp.q_WB[0])

@@ -129,8 +129,10 @@ def read_truth(session: Session, *, offset_s: float | None = None) -> Truth:
     traj = read_markers(gt.file)
     pts = joint_points(session, traj)
     t = traj.t + (session.offset_s("groundtruth_offset_s") if offset_s is None else offset_s)
-    return Truth(t, {j: to_world(p, gt.to_world) for j, p in pts.items()},
-                 traj.rate_hz)  # every named point: joints, or a palm session's markers
+    rate = traj.rate_hz
+    del traj  # the file's table freed before the points are carried into W (issue 15)
+    return Truth(t, {j: to_world(pts.pop(j), gt.to_world) for j in list(pts)},
+                 rate)  # every named point: joints, or a palm session's markers
 
 
 def read_hand_angles(session: Session) -> tuple[np.ndarray, np.ndarray] | None:

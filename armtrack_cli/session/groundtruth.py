@@ -19,7 +19,7 @@ from armtrack_cli.core.limits import MAX_SESSION_S, MAX_TEXT_BYTES
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session import c3d, qtm6dof, qualisys, vicon
 from armtrack_cli.session.files import regular_file
-from armtrack_cli.session.text_table import read_text_lines
+from armtrack_cli.session.text_head import read_text_head
 
 FORMATS = "QTM 3D or 6DOF TSV, C3D, or Vicon Nexus trajectories CSV"
 
@@ -30,9 +30,10 @@ def read_markers(path: str | Path) -> MarkerTrajectories:
                         hint="check [groundtruth] file in session.toml", max_bytes=MAX_TEXT_BYTES)
     if c3d.is_c3d(path):
         return _plausible(c3d.read_c3d(path))
-    lines = read_text_lines(path, GroundTruthError, f"a ground-truth file ({FORMATS})")
-    if vicon.looks_like_vicon(lines):
-        return _plausible(vicon.read_vicon_csv(path, lines=lines))
+    lines = read_text_head(path, GroundTruthError, f"a ground-truth file ({FORMATS})")
+    if vicon.looks_like_vicon(lines):  # the head tells the format; a long file is read again
+        whole = getattr(lines, "whole", True)
+        return _plausible(vicon.read_vicon_csv(path, lines=lines if whole else None))
     keys, _ = qualisys._header(path, lines)
     if qtm6dof.is_6dof(keys):
         return _plausible(qtm6dof.read_qtm_6dof(path))

@@ -13,7 +13,7 @@ import json
 import os
 import re
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -107,10 +107,17 @@ def _jsonable(o: Any) -> Any:
 
 def write_table(path: str | Path, table: pd.DataFrame, *, command: str,
                 settings: dict[str, Any] | None = None, float_format: str = "%.6f") -> Path:
-    """CSV (NaN written as empty cells: missing, never zero) plus its provenance sidecar."""
-    text = (_float_csv(table, float_format) if _all_float(table)
-            else table.to_csv(index=False, float_format=float_format, lineterminator="\n"))
-    out = write_text(path, text)
+    """CSV (NaN written as empty cells: missing, never zero) plus its provenance sidecar,
+    written to the file a block of rows at a time: the text of a long table is never held
+    whole (a 60-minute trajectory's is ~30 MB, its str, join and bytes three times that)."""
+    def write(p: Path) -> None:
+        with open(p, "w", encoding="utf-8", newline="") as f:
+            if _all_float(table):
+                f.writelines(_float_csv(table, float_format))
+            else:  # pandas writes a chunk of rows at a time to a file
+                table.to_csv(f, index=False, float_format=float_format, lineterminator="\n")
+
+    out = atomic_write(path, write)
     write_json(Path(path).with_suffix(".meta.json"),
                {"armtrack_version": __version__, "command": command, "settings": settings or {}})
     return out
@@ -167,19 +174,19 @@ def _all_float(table: pd.DataFrame) -> bool:
             and not any(set(str(c)) & set(',"\n\r') for c in table.columns))
 
 
-def _float_csv(table: pd.DataFrame, float_format: str) -> str:
+def _float_csv(table: pd.DataFrame, float_format: str) -> Iterator[str]:
     """What pandas' to_csv(index=False, float_format=…) writes for an all-float table, one
     % per row instead of one per cell (a 60-minute trajectory has 3 million cells): the same
-    % formatting, NaN as an empty cell."""
+    % formatting, NaN as an empty cell; the header, then a block of rows at a time (each
+    block's numbers copied out of the table alone: bounded however long the table)."""
     row = ",".join([float_format] * table.shape[1])
-    a = table.to_numpy()
-    text = [",".join(map(str, table.columns)) + "\n"]
-    for lo in range(0, len(a), 4096):  # a block of rows at a time: bounded Python objects
-        text.append(_NAN_CELL.sub("", "".join(row % tuple(r) + "\n"
-                                              for r in a[lo:lo + 4096].tolist())))
-    return "".join(text)
+    yield ",".join(map(str, table.columns)) + "\n"
+    for lo in range(0, len(table), CSV_BLOCK):
+        block = table.iloc[lo:lo + CSV_BLOCK].to_numpy().tolist()
+        yield _NAN_CELL.sub("", "".join(row % tuple(r) + "\n" for r in block))
 
 
+CSV_BLOCK = 4096  # rows formatted and written at once
 _NAN_CELL = re.compile(r"(?<![^,\n])nan(?![^,\n])")  # a whole cell "nan"
 
 

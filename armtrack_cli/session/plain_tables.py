@@ -1,5 +1,6 @@
 """trajectory-METHOD.csv and kinematics-METHOD.csv read without pandas (compare starts without
-importing it): the files armtrack writes, parsed by numpy and the csv module to the values
+importing it): the files armtrack writes, the trajectory streamed by session/numeric_text (a
+60-minute one is never held as text), the kinematics parsed by the csv module, to the values
 session/tables.py's pandas readers give. Anything those readers would refuse, or read in a
 way this one does not copy (quoted cells, NA spellings, stray spaces, infinities), is handed
 to them, so a bad file gets their one-line error word for word."""
@@ -16,10 +17,10 @@ import numpy as np
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.limits import MAX_TEXT_BYTES
 from armtrack_cli.session.files import regular_file
+from armtrack_cli.session.numeric_text import Irregular, Layout, file_rows
 
 TRAJECTORY_NEEDS = ("t", "wrist_x", "wrist_y", "wrist_z")
 KINEMATICS_NEEDS = ("measure", "segment", "value", "sd", "unit")
-_EMPTY_CELL = re.compile(r"(?<![^,\n])(?=,|\n|$)")  # a cell with nothing in it
 _INT = re.compile(r"[+-]?\d{1,18}")
 _FLOAT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 MAX_POSITION_M = 100.0  # as session/tables.py: farther from the board is not a measurement
@@ -54,20 +55,27 @@ def trajectory_columns(path: Path) -> dict[str, np.ndarray]:
 
 
 def _plain_trajectory(path: Path) -> dict[str, np.ndarray]:
-    text = _text(path, "run `armtrack fuse SESSION --method M` first")
-    head, _, body = text.partition("\n")
-    names = head.split(",")
-    if (len(set(names)) != len(names) or any(n != n.strip() or not n for n in names)
-            or not set(TRAJECTORY_NEEDS) <= set(names) or not body.strip()):
+    """The columns streamed by session/numeric_text (plain numbers only, empty cells NaN)."""
+    regular_file(path, DataError, "a CSV table", hint="run `armtrack fuse SESSION --method M` first",
+                 max_bytes=MAX_TEXT_BYTES)
+    with open(path, "rb") as f:
+        head = f.readline()
+    try:
+        names = head.decode("utf-8").rstrip("\r\n").split(",")
+    except UnicodeDecodeError:
+        raise _Irregular from None
+    if (len(set(names)) != len(names) or any(n != n.strip() or not n or '"' in n for n in names)
+            or not set(TRAJECTORY_NEEDS) <= set(names)):
         raise _Irregular
     try:
-        values = np.loadtxt(io.StringIO(_EMPTY_CELL.sub("nan", body.rstrip("\n"))),
-                            delimiter=",", ndmin=2, dtype=float)
-    except ValueError:
+        values = file_rows(path, 1, Layout(len(names), ",", tuple(names)), DataError,
+                           by_row=False).data
+    except Irregular:
         raise _Irregular from None
-    if values.shape[1] != len(names) or np.isinf(values).any():
+    if np.isinf(values).any():
         raise _Irregular
     cols = {n: np.ascontiguousarray(values[:, k]) for k, n in enumerate(names)}
+    del values
     t = cols["t"]
     if np.isnan(t).any() or (np.diff(t) <= 0).any():
         raise _Irregular

@@ -15,7 +15,8 @@ import numpy as np
 from armtrack_cli.core.errors import GroundTruthError, did_you_mean
 from armtrack_cli.core.limits import MAX_SESSION_S
 from armtrack_cli.core.streams import MarkerTrajectories
-from armtrack_cli.session.text_table import parse_table, read_text_lines
+from armtrack_cli.session.text_head import read_text_head
+from armtrack_cli.session.text_table import parse_rows, parse_table
 
 MM = 1e-3  # QTM exports millimetres
 _KEY = re.compile(r"^[A-Z][A-Z0-9_]*(\t|$)")
@@ -38,7 +39,7 @@ def _header(path: Path, lines: list[str]) -> tuple[dict[str, list[str]], int]:
 
 def read_qualisys(path: str | Path) -> MarkerTrajectories:
     path = Path(path)
-    lines = read_text_lines(path, GroundTruthError, "a Qualisys TSV export")
+    lines = read_text_head(path, GroundTruthError, "a Qualisys TSV export")  # the rest streamed
     keys, at = _header(path, lines)
     if "NO_OF_BODIES" in keys or "BODY_NAMES" in keys or keys.get("DATA_INCLUDED", [""])[0] == "6D":
         raise GroundTruthError(path, "is a 6DOF (rigid body) export",
@@ -71,9 +72,8 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
         time_col = cols.index("time") if "time" in cols else None
         first = len([c for c in (frame_col, time_col) if c is not None])
     else:
-        fake = "\t".join(f"c{k}" for k in range(len(lines[at].rstrip("\t\r\n").split("\t"))))
-        tab = parse_table(path, [fake] + lines[at:], 0, "\t", GroundTruthError)
-        tab = type(tab)(tab.header, tab.data, tab.line_of + at - 1, tab.notes)
+        fake = [f"c{k}" for k in range(len(lines[at].rstrip("\t\r\n").split("\t")))]
+        tab = parse_rows(path, lines, at, fake, "\t", GroundTruthError)
         n = tab.data.shape[1]
         first = n - 3 * m
         if first not in (0, 1, 2):
@@ -86,16 +86,17 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     if coords.shape[1] != 3 * m:
         raise GroundTruthError(path, f"has {coords.shape[1]} coordinate columns for {m} markers "
                                f"(expected {3 * m})", "is MARKER_NAMES complete?")
-    far = np.isinf(coords) | (np.abs(np.nan_to_num(coords)) > MAX_MARKER_MM)
+    far = (coords > MAX_MARKER_MM) | (coords < -MAX_MARKER_MM)  # ±inf too; NaN (a gap) not
     if far.any():
         r, k = np.argwhere(far)[0]
         raise GroundTruthError(path, f"line {tab.line_of[r]}: marker {names[k // 3]} has "
                                f"{'XYZ'[k % 3]} = {coords[r, k]:g} mm, beyond any capture volume",
                                "the row is damaged: empty its cells (a gap)")
-    xyz = coords.reshape(-1, m, 3) * MM
+    t = _times(path, tab, time_col, frame_col, freq, coords.shape[0]).copy()
+    coords *= MM  # in place (as (N, 3M): a (N, M, 3) view would be copied to multiply)
+    xyz = coords.reshape(-1, m, 3)  # a view of the table's columns: no copy of a long session
     xyz[np.all(xyz == 0.0, axis=2)] = np.nan  # QTM writes gaps as zeros in some versions
     xyz[np.any(np.isnan(xyz), axis=2)] = np.nan
-    t = _times(path, tab, time_col, frame_col, freq, xyz.shape[0])
     notes = list(tab.notes)
     n_frames = keys.get("NO_OF_FRAMES", [None])[0]
     if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
