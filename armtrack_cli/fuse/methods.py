@@ -145,8 +145,8 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     Particles are an (N, 6) array. After every resampling the weights are equal, so each
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
-    reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py). ``v_ref`` (n, 3):
-    pf-constraint's velocities move s.kalman_velocity of the way to it after step 6."""
+    reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py); pf-constraint's
+    velocities move s.kalman_velocity of the way to ``v_ref`` (n, 3) after step 6."""
     from armtrack_cli.filters import splitmix  # numba's: imported only when a particle filter runs
 
     rng = np.random.default_rng(s.seed)
@@ -338,8 +338,7 @@ def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Proje
                         s: FuseSettings, arm: Arm, first: Estimates) -> Estimates:
     """pf-constraint again on a_W corrected by the IMU's orientation error and accelerometer
     bias as a forward Kalman pass estimates them from the data up to each frame, linearised
-    about the first run's estimates, then about its own (fuse/imu_error.py); the particles'
-    velocities moved to its velocity after each frame (kalman_velocity): still forward."""
+    about the first run's estimates, then its own, its velocity given to them (fuse/imu_error.py)."""
     from armtrack_cli.fuse import imu_error  # numba's: imported only when it runs
 
     if inp.imu is None or inp.t is None:
