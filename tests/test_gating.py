@@ -111,6 +111,17 @@ def test_particle_kernel_equals_the_reference_while_gating_and_reseeding(scheme,
                      reseed_ess=0.3)
     a = run_particles(inp, x0, P0, proj, s, arm, constrained=constrained, compiled=True)
     b = run_particles(inp, x0, P0, proj, s, arm, constrained=constrained, compiled=False)
+    _assert_same(a, b, constrained)
+    if constrained:  # and with the cloud's velocities moved toward a reference's
+        s = replace(s, kalman_velocity=0.7)
+        v_ref = np.random.default_rng(2).normal(0.0, 0.2, (z.shape[0], 3))
+        c, d = (run_particles(inp, x0, P0, proj, s, arm, constrained=True, compiled=k,
+                              v_ref=v_ref) for k in (True, False))
+        _assert_same(c, d, constrained)
+        assert np.abs(c.mean[1:, 3:] - a.mean[1:, 3:]).min() > 1e-6  # it did move them
+
+
+def _assert_same(a, b, constrained):
     for code in (robust.GATED, robust.REACQUIRED) + ((robust.RESEEDED,) if constrained else ()):
         assert (b.codes == code).any(), (code, b.codes)
     np.testing.assert_array_equal(a.codes, b.codes)

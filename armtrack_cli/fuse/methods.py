@@ -137,7 +137,7 @@ def _predict_particles(x: np.ndarray, st: Steps, k: int, ace: np.ndarray,
 
 def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
                   s: FuseSettings, arm: Arm | None, *, constrained: bool,
-                  compiled: bool = True) -> Estimates:
+                  compiled: bool = True, v_ref: np.ndarray | None = None) -> Estimates:
     """Bootstrap PF (eqs. 12-14), or the layered-sampling PF of section III-E, steps 1-7, each
     detection gated and pf-constraint re-seeded on the ray-sphere points when its colour layer
     collapses or it re-acquires (fuse/robust.py).
@@ -145,7 +145,8 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     Particles are an (N, 6) array. After every resampling the weights are equal, so each
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
-    reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py)."""
+    reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py); pf-constraint's
+    velocities move s.kalman_velocity of the way to ``v_ref`` (n, 3) after step 6."""
     from armtrack_cli.filters import splitmix  # numba's: imported only when a particle filter runs
 
     rng = np.random.default_rng(s.seed)
@@ -155,8 +156,11 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     n_frames = inp.z.shape[0]
     points = (robust.ray_sphere_points(proj, arm, inp.z, inp.q_WB) if constrained
               else np.full((n_frames, 2, 3), np.nan))
+    v_gain = s.kalman_velocity if v_ref is not None else 0.0
+    v_ref = np.zeros((n_frames, 3)) if v_ref is None else v_ref
     if compiled:
-        return _run_particles_compiled(inp, x, state, proj, s, arm, constrained, points)
+        return _run_particles_compiled(inp, x, state, proj, s, arm, constrained, points,
+                                       (_f64(v_ref), float(v_gain)))
     rng = splitmix.Stream(state)
     resample = scheme(s.resampling)
     w = np.full(N, 1.0 / N)
@@ -202,6 +206,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             mean[k], cov[k] = moments(x, w)
             x = x[resample(w, rng)]  # step 6
             w = np.full(N, 1.0 / N)
+            x[:, 3:] += v_gain * (v_ref[k] - mean[k, 3:])  # (fuse/imu_error.py)
         else:
             mean[k], cov[k] = moments(x, w)
             if n_eff[k] < s.pf_resample_ess * N:
@@ -235,7 +240,7 @@ def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
 
 def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
-                            constrained: bool, points: np.ndarray) -> Estimates:
+                            constrained: bool, points: np.ndarray, vel: tuple) -> Estimates:
     from armtrack_cli.fuse import pf_kernel
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
@@ -247,7 +252,7 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
-        float(s.pf_resample_ess), _guard(s, points))
+        float(s.pf_resample_ess), _guard(s, points), *vel)
     return Estimates(mean, cov, n_eff, codes)
 
 
@@ -287,7 +292,7 @@ def load_kernels(method: str) -> None:
     else:
         pf_kernel.run(np.zeros((10, 6)), np.zeros(2, np.uint64), z, q, d3, d3, d3,
                       d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
-                      1.0, _guard(FuseSettings(particles=10), np.zeros((2, 2, 3))))
+                      1.0, _guard(FuseSettings(particles=10), np.zeros((2, 2, 3))), d3, 0.0)
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
@@ -333,15 +338,15 @@ def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Proje
                         s: FuseSettings, arm: Arm, first: Estimates) -> Estimates:
     """pf-constraint again on a_W corrected by the IMU's orientation error and accelerometer
     bias as a forward Kalman pass estimates them from the data up to each frame, linearised
-    about the first run's estimates (fuse/imu_error.py): still a forward filter."""
+    about the first run's estimates, then its own, its velocity given to them (fuse/imu_error.py)."""
     from armtrack_cli.fuse import imu_error  # numba's: imported only when it runs
 
     if inp.imu is None or inp.t is None:
         raise ValueError("imu_error = 'causal' needs the IMU samples and the frame times")
-    th, ba = imu_error.causal_errors(inp, first.mean, x0, P0, proj, s, arm)
+    th, ba, v = imu_error.causal_errors(inp, first.mean, x0, P0, proj, s, arm, s.kalman_passes)
     est = run_particles(replace(inp, steps=imu_error.corrected(inp, inp.steps, th, ba),
                                 q_WB=arm_smoother.corrected(inp.q_WB, th)), x0, P0, proj, s, arm,
-                        constrained=True)
+                        constrained=True, v_ref=v)
     summary = {"orientation_error_rms_deg": round(float(np.degrees(np.sqrt(np.mean(np.sum(
         th**2, axis=1))))), 3), "accel_bias_m_s2": [round(float(v), 4) for v in ba[-1]]}
     return replace(est, summary=summary)

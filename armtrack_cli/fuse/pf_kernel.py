@@ -298,11 +298,13 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
 
 @njit(cache=True, error_model="numpy")
 def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
-        constrained, scheme, resample_ess, guard):
+        constrained, scheme, resample_ess, guard, v_ref, v_gain):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
     (eqs. 12-14). x (N, 6) the initial particles; state (2,) the splitmix stream (advanced);
     ``guard`` = (points (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess,
-    reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py.
+    reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py; v_ref
+    (n_frames, 3), v_gain: pf-constraint's cloud moved by v_gain (v_ref_k − its mean velocity)
+    after step 6 (methods.run_particles).
     Returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
     n_frames, N = z.shape[0], x.shape[0]
     mean = np.empty((n_frames, 6))
@@ -350,6 +352,11 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
         xs, xr = xr, xs
         w[:] = 1.0 / N
         uniform = True
+        if constrained and v_gain > 0.0:
+            for j in range(3):
+                shift = v_gain * (v_ref[k, j] - mean[k, 3 + j])
+                for i in range(N):
+                    xs[3 + j, i] += shift
     return mean, cov, n_eff, codes
 
 

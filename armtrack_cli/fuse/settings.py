@@ -47,6 +47,11 @@ class FuseSettings:
     reseed_sigma_m: float = 0.005  # spread of the re-seeded particles about an intersection
     reseed_prior_m: float = 0.05  # SD added to the predicted cloud's when it weighs the two
     #                               intersections against each other
+    kalman_passes: int = 2  # imu_error = "causal": forward Kalman passes, each linearised
+    #                         about the one before (the first about the particles' own)
+    kalman_velocity: float = 0.0  # pf-constraint with imu_error = "causal": after each frame
+    #                               the cloud's velocities move this share of the way to the
+    #                               causal Kalman pass's velocity (fuse/imu_error.py); 0: off
     imu_bias_window_s: float = 0.0  # pf-constraint: > 0 runs it on a_W less the acceleration
     #                                 error fitted causally over this many seconds of its own
     #                                 earlier estimates (fuse/imu_bias.py); 0: off
@@ -105,11 +110,13 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
                           did_you_mean(s.smoother, SMOOTHERS, what="smoothers"))
     if not (s.gate_chi2 >= 0 and s.reacquire_frames >= 1 and 0 <= s.reseed_share <= 1
             and s.reseed_ess >= 0 and s.reseed_sigma_m >= 0 and s.reseed_prior_m >= 0
-            and s.imu_bias_window_s >= 0):
-        raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_*, imu_bias_window_s "
-                          "are out of range",
+            and s.imu_bias_window_s >= 0 and 0 <= s.kalman_velocity <= 1
+            and s.kalman_passes >= 1):
+        raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_*, imu_bias_window_s, "
+                          "kalman_velocity, kalman_passes are out of range",
                           "gate_chi2 ≥ 0 (0: off), reacquire_frames ≥ 1, 0 ≤ reseed_share ≤ 1, "
-                          "reseed_ess, reseed_sigma_m, reseed_prior_m, imu_bias_window_s ≥ 0")
+                          "reseed_ess, reseed_sigma_m, reseed_prior_m, imu_bias_window_s ≥ 0, "
+                          "0 ≤ kalman_velocity ≤ 1, kalman_passes ≥ 1")
     for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS),
                               ("imu_error", s.imu_error, IMU_ERRORS),
                               ("orientation_model", s.orientation_model, ORIENTATION_MODELS)):
