@@ -102,6 +102,23 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     return Prepared(t_f, frames, inputs, proj, arm, how, q_anch)
 
 
+def _initial_state(session: Session, p: Prepared, s) -> tuple[np.ndarray, np.ndarray, str]:
+    """The filter's first state and covariance from the first detection (and the arm, which
+    must be able to explain it), and how the wrist was placed."""
+    inp = p.inputs
+    if p.arm is not None:
+        miss = models.ray_misses_arm(p.projection, inp.z[0], p.arm, inp.q_WB[0])
+        if miss > REACH_MARGIN_M:
+            raise ConfigError(session.toml_path, f"[arm] cannot explain the first detection: its "
+                              f"camera ray passes {miss * 100:.0f} cm outside the arm's reach "
+                              f"from shoulder_m = {session.arm.shoulder_m.tolist()}",
+                              "check shoulder_m (in W, metres) and the arm lengths")
+    x0 = np.zeros(6)
+    x0[:3], how = models.initial_wrist(p.projection, inp.z[0], arm=p.arm, q_WB=inp.q_WB[0],
+                                       plane_height_m=s.init_plane_m)
+    return x0, np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3), how
+
+
 def fuse(path: str | Path, *, method: str | None = None, particles: int | None = None,
          seed: int | None = None, recipe: str | None = None, sets: tuple[str, ...] = (),
          out: str | Path | None = None) -> dict[str, Any]:
@@ -130,17 +147,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             p.arm, shoulder=auto.shoulder, L1=auto.upper_arm_m, L2=auto.forearm_m))
     p = dataclasses.replace(p, q_anchored=None)  # the arm estimate's alone: not held on
     inp = p.inputs
-    if p.arm is not None:
-        miss = models.ray_misses_arm(p.projection, inp.z[0], p.arm, inp.q_WB[0])
-        if miss > REACH_MARGIN_M:
-            raise ConfigError(session.toml_path, f"[arm] cannot explain the first detection: its "
-                              f"camera ray passes {miss * 100:.0f} cm outside the arm's reach "
-                              f"from shoulder_m = {session.arm.shoulder_m.tolist()}",
-                              "check shoulder_m (in W, metres) and the arm lengths")
-    x0 = np.zeros(6)
-    x0[:3], how = models.initial_wrist(p.projection, inp.z[0], arm=p.arm, q_WB=inp.q_WB[0],
-                                       plane_height_m=s.init_plane_m)
-    P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
+    x0, P0, how = _initial_state(session, p, s)
     start = time.perf_counter()
     load_kernels(s.method)  # numba's one-time set-up, timed apart: frames_per_s is the filter's
     setup = time.perf_counter() - start
