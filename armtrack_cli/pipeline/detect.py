@@ -51,8 +51,11 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
             raise ConfigError(session.toml_path, "[camera] patch is missing, which detect needs",
                               "add patch = { hsv_low = [H, S, V], hsv_high = [H, S, V] }")
         settings = section(doc, "detect.patch", PatchSettings, where)
+        setup = time.perf_counter()  # numba's import and the kernel's tables: kernel_setup_s
         tracker = PatchTracker(session.camera.patch.low, session.camera.patch.high, settings,
                                fps=video.fps, frames=video.n_frames)
+        setup = time.perf_counter() - setup
+        start += setup
         for i, _, img in iter_frames_ahead(video, i420=True):
             tracker.step(i, img)
             if on_frame:
@@ -65,7 +68,7 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
         lost = np.flatnonzero(np.diff(np.r_[0, (~ok).astype(int), 0]) != 0).reshape(-1, 2)
         summary = {"ok_frames": int(ok.sum()), "lost_spans": len(lost),
                    "longest_loss_s": round(float((lost[:, 1] - lost[:, 0]).max() / video.fps), 3)
-                   if len(lost) else 0.0}
+                   if len(lost) else 0.0, "kernel_setup_s": round(setup, 3)}
     elapsed = time.perf_counter() - start
     dest = out_dir(session, out)
     with output_set():
