@@ -24,6 +24,8 @@ from armtrack_cli.session.video import iter_frames_i420, probe_video
 from armtrack_cli.simulate.palm_session import PalmSimSettings
 from armtrack_cli.vision.yuv import YuvFrame
 
+from .test_palm_blob_kernel import _scene
+
 pytest.importorskip("av")
 
 SAMPLE = Path(__file__).resolve().parents[1] / "sample_sessions" / "wrist-rom-01"
@@ -121,15 +123,7 @@ def test_planes_give_the_reference_blobs_on_a_simulated_palm_session(tmp_path):
 def _scene_planes(rng: np.random.Generator, hues) -> YuvFrame:
     """A noisy 240 x 320 scene (discs of the given hues on a skin-coloured hand, some clipped,
     some touching) as I420 planes, by OpenCV's BGR -> I420."""
-    img = np.full((240, 320, 3), (60, 90, 70), np.uint8)
-    cv2.ellipse(img, (150, 120), (80, 60), 0, 0, 360, (120, 150, 210), -1)
-    for _ in range(14):
-        h = int(rng.choice(hues)) % 180
-        bgr = cv2.cvtColor(np.uint8([[[h, rng.integers(120, 256), rng.integers(90, 256)]]]),
-                           cv2.COLOR_HSV2BGR)[0, 0]
-        centre = (int(rng.integers(60, 260)), int(rng.integers(50, 200)))
-        cv2.circle(img, centre, int(rng.integers(2, 8)), tuple(int(c) for c in bgr), -1)
-    img = np.clip(img + rng.normal(0, 6, img.shape), 0, 255).astype(np.uint8)
+    img = _scene(rng, hues)  # the BGR scene test_palm_blob_kernel searches
     i420 = cv2.cvtColor(img, cv2.COLOR_BGR2YUV_I420).reshape(-1)
     y = i420[:240 * 320].reshape(240, 320)
     u = i420[240 * 320:240 * 320 * 5 // 4].reshape(120, 160)
