@@ -24,7 +24,7 @@ from armtrack_cli.session.video import iter_frames_i420, probe_video
 from armtrack_cli.simulate.palm_session import PalmSimSettings
 from armtrack_cli.vision.yuv import YuvFrame
 
-from .test_palm_blob_kernel import _scene
+from .test_palm_blob_kernel import RANDOM_SCENES, _scene
 
 pytest.importorskip("av")
 
@@ -130,9 +130,7 @@ def _scene_planes(rng: np.random.Generator, hues) -> YuvFrame:
     return YuvFrame(y, u, i420[240 * 320 * 5 // 4:].reshape(120, 160))
 
 
-@pytest.mark.parametrize("low, high, hues", [
-    ((172, 120, 80), (6, 255, 255), (170, 175, 178, 0, 3, 8, 30, 100)),  # wraps through red
-    ((50, 100, 60), (70, 255, 255), (45, 55, 60, 68, 75, 120))])
+@pytest.mark.parametrize("low, high, hues", RANDOM_SCENES)
 def test_planes_give_the_reference_blobs_on_random_scenes(low, high, hues):
     rng = np.random.default_rng(11)
     frames = [_scene_planes(rng, hues) for _ in range(30)]

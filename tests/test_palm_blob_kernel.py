@@ -98,9 +98,12 @@ def _scene(rng: np.random.Generator, hues) -> np.ndarray:
     return np.clip(img + noise, 0, 255).astype(np.uint8)
 
 
-@pytest.mark.parametrize("low, high, hues", [
-    ((172, 120, 80), (6, 255, 255), (170, 175, 178, 0, 3, 8, 30, 100)),  # wraps through red
-    ((50, 100, 60), (70, 255, 255), (45, 55, 60, 68, 75, 120))])
+# colour ranges (low, high) and the disc hues drawn in a random scene: one wraps through red
+RANDOM_SCENES = [((172, 120, 80), (6, 255, 255), (170, 175, 178, 0, 3, 8, 30, 100)),
+                 ((50, 100, 60), (70, 255, 255), (45, 55, 60, 68, 75, 120))]
+
+
+@pytest.mark.parametrize("low, high, hues", RANDOM_SCENES)
 def test_compiled_search_equals_the_opencv_reference_on_random_scenes(low, high, hues):
     rng = np.random.default_rng(7)
     frames = [_scene(rng, hues) for _ in range(40)]
