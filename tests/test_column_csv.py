@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from armtrack_cli.session import column_csv
+from armtrack_cli.session import outputs
 from armtrack_cli.session.column_csv import write_columns
 from armtrack_cli.session.outputs import write_table
 
@@ -28,7 +28,7 @@ def _columns(n: int) -> dict[str, np.ndarray]:
 
 @pytest.mark.parametrize("n", [0, 1, 5000])
 def test_write_columns_writes_write_tables_bytes(tmp_path, monkeypatch, n):
-    monkeypatch.setattr(column_csv, "BLOCK", 1000)  # several blocks, one cut mid-table
+    monkeypatch.setattr(outputs, "CSV_BLOCK", 1000)  # several blocks, one cut mid-table
     cols = _columns(n)
     write_columns(tmp_path / "a.csv", cols, command="detect", settings={"k": 1})
     write_table(tmp_path / "b.csv", pd.DataFrame(cols), command="detect", settings={"k": 1})

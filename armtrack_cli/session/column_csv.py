@@ -5,17 +5,13 @@ memory (a 60-minute detections.csv, 108,000 rows, took ~30 MB more through panda
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from armtrack_cli import __version__
-from armtrack_cli.session.outputs import atomic_write, write_json
-
-BLOCK = 4096  # rows formatted at a time: a bounded number of Python objects
-_NAN_CELL = re.compile(r"(?<![^,\n])nan(?![^,\n])")  # a whole cell "nan": empty (missing)
+from armtrack_cli.session.outputs import atomic_write, column_lines, write_json
 
 
 def write_columns(path: str | Path, columns: dict[str, np.ndarray], *, command: str,
@@ -29,15 +25,11 @@ def write_columns(path: str | Path, columns: dict[str, np.ndarray], *, command: 
             or any(set(n) & set(',"\n\r') for n in names):
         raise ValueError("write_columns takes plainly named integer and float columns of one "
                          "length")  # an internal misuse, never the user's data
-    row = ",".join("%d" if k in "iu" else float_format for k in kinds) + "\n"
-    n = len(cols[0])
+    formats = ["%d" if k in "iu" else float_format for k in kinds]
 
     def write(p: Path) -> None:
         with open(p, "w", encoding="utf-8", newline="") as f:
-            f.write(",".join(names) + "\n")
-            for lo in range(0, n, BLOCK):
-                block = [c[lo:lo + BLOCK].tolist() for c in cols]
-                f.write(_NAN_CELL.sub("", "".join(row % r for r in zip(*block))))
+            f.writelines(column_lines(names, cols, formats))
 
     out = atomic_write(path, write)
     write_json(Path(path).with_suffix(".meta.json"),

@@ -175,15 +175,20 @@ def _all_float(table: pd.DataFrame) -> bool:
 
 
 def _float_csv(table: pd.DataFrame, float_format: str) -> Iterator[str]:
-    """What pandas' to_csv(index=False, float_format=…) writes for an all-float table, one
-    % per row instead of one per cell (a 60-minute trajectory has 3 million cells): the same
-    % formatting, NaN as an empty cell; the header, then a block of rows at a time (each
-    block's numbers copied out of the table alone: bounded however long the table)."""
-    row = ",".join([float_format] * table.shape[1])
-    yield ",".join(map(str, table.columns)) + "\n"
-    for lo in range(0, len(table), CSV_BLOCK):
-        block = table.iloc[lo:lo + CSV_BLOCK].to_numpy().tolist()
-        yield _NAN_CELL.sub("", "".join(row % tuple(r) + "\n" for r in block))
+    """What pandas' to_csv(index=False, float_format=…) writes for an all-float table."""
+    cols = [table.iloc[:, j].to_numpy() for j in range(table.shape[1])]
+    return column_lines(list(map(str, table.columns)), cols, [float_format] * len(cols))
+
+
+def column_lines(names: list[str], cols: list, formats: list[str]) -> Iterator[str]:
+    """CSV text of equal-length (N,) columns, one % format each: the header, then a block of
+    rows at a time (one % per row instead of one per cell; each block's numbers copied out of
+    the columns alone: bounded however long the table), NaN as an empty cell (missing)."""
+    row = ",".join(formats) + "\n"
+    yield ",".join(names) + "\n"
+    for lo in range(0, len(cols[0]) if cols else 0, CSV_BLOCK):
+        block = [c[lo:lo + CSV_BLOCK].tolist() for c in cols]
+        yield _NAN_CELL.sub("", "".join(row % r for r in zip(*block)))
 
 
 CSV_BLOCK = 4096  # rows formatted and written at once
