@@ -10,8 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from armtrack_cli import __version__
-from armtrack_cli.session.outputs import atomic_write, column_lines, write_json
+from armtrack_cli.session.outputs import atomic_write, column_lines, write_provenance
 
 
 def write_columns(path: str | Path, columns: dict[str, np.ndarray], *, command: str,
@@ -32,6 +31,5 @@ def write_columns(path: str | Path, columns: dict[str, np.ndarray], *, command: 
             f.writelines(column_lines(names, cols, formats))
 
     out = atomic_write(path, write)
-    write_json(Path(path).with_suffix(".meta.json"),
-               {"armtrack_version": __version__, "command": command, "settings": settings or {}})
+    write_provenance(path, command, settings)
     return out

@@ -99,6 +99,14 @@ def write_json(path: str | Path, obj: Any) -> Path:
     return write_text(path, json.dumps(obj, indent=2, sort_keys=True, default=_jsonable) + "\n")
 
 
+def write_provenance(path: str | Path, command: str, settings: dict[str, Any] | None) -> Path:
+    """A table's sidecar NAME.meta.json: the armtrack version, the command and the settings
+    that made it."""
+    return write_json(Path(path).with_suffix(".meta.json"),
+                      {"armtrack_version": __version__, "command": command,
+                       "settings": settings or {}})
+
+
 def _jsonable(o: Any) -> Any:
     if hasattr(o, "tolist"):
         return o.tolist()
@@ -118,8 +126,7 @@ def write_table(path: str | Path, table: pd.DataFrame, *, command: str,
                 table.to_csv(f, index=False, float_format=float_format, lineterminator="\n")
 
     out = atomic_write(path, write)
-    write_json(Path(path).with_suffix(".meta.json"),
-               {"armtrack_version": __version__, "command": command, "settings": settings or {}})
+    write_provenance(path, command, settings)
     return out
 
 
@@ -152,8 +159,7 @@ def write_rows(path: str | Path, rows: list[dict[str, Any]], *, command: str,
     for i in range(len(rows)):
         w.writerow([f(c[i]) for f, c in zip(fmt, cols)])
     out = write_text(path, buf.getvalue())
-    write_json(Path(path).with_suffix(".meta.json"),
-               {"armtrack_version": __version__, "command": command, "settings": settings or {}})
+    write_provenance(path, command, settings)
     return out
 
 
