@@ -108,16 +108,16 @@ def main() -> None:
     parts, dec, once = per_frame(frames), decode_cpu(video), once_costs()
     total = parts["detect() in all"][0]
     full, whole, skin = parts["full"][0], parts["whole"][0], parts["skin"][0]
-    window = parts["search"][0] - (full - skin)
+    region = full - skin - whole  # _full calls whole_bgr, hand_roi, then _search
+    window = parts["search"][0] - region
     rows = [("detect() in all", total, video.n_frames),
             ("search of the window (kernel, on the planes)", window,
              video.n_frames - parts["full"][1]),
-            ("re-acquiring: the hand's whole region, in all", whole + full, parts["full"][1]),
+            ("re-acquiring: the hand's whole region, in all", full, parts["full"][1]),
             ("  the whole frame to BGR (OpenCV)", whole, parts["full"][1]),
             ("  the hand by skin colour at half size (OpenCV)", skin, parts["skin"][1]),
-            ("  search of the hand's region (kernel, BGR)", full - skin, parts["full"][1]),
-            ("the rest of detect() (bookkeeping, the next window)", total - window - full - whole,
-             "")]
+            ("  search of the hand's region (kernel, on the planes)", region, parts["full"][1]),
+            ("the rest of detect() (bookkeeping, the next window)", total - window - full, "")]
     print(f"wrist-rom-01, {video.n_frames} frames; CPU µs per frame of all frames (best of "
           "3):\n")
     print("| part | µs per frame | calls | share of detect() |\n|---|---|---|---|")

@@ -70,9 +70,9 @@ def _scan_i420(yp, up, vp, x0, y0, x1, y1, ytab, cand, core, sdiv, hdiv, label, 
     for y in range(y0, y1):
         if y == y0 or y % 2 == 0:
             _row_ranges(up, vp, y >> 1, x0 >> 1, (x1 + 1) >> 1, ytab, cand, sdiv, hdiv, lo, hi)
-        for j in range(w):  # vectorised: a superset of the candidates
-            yv = yp[y, x0 + j]
-            maybe[j] = (yv >= lo[j]) & (yv <= hi[j])
+        row = yp[y, x0:x1]  # a 1-D slice: the loop below compiles to vector instructions
+        for j in range(w):  # a superset of the candidates
+            maybe[j] = (row[j] >= lo[j]) & (row[j] <= hi[j])
         maybe[w:nw * 8] = 0
         for wj in range(nw):
             if words[wj] == 0:
