@@ -1,7 +1,7 @@
 """What each part of palm-blob detection costs per frame (CPU µs of this process), on the frames
 as `detect` gets them (PyAV's I420 planes), for the bundled wrist-rom-01: decoding, the search
 of the window around the last blobs (on the planes), the search of the hand's whole region
-(the frame converted to BGR, the hand found by skin colour, its region searched), the rest of
+(the hand found by skin colour, straight from the planes, its region searched), the rest of
 detect(); and what a fresh `armtrack detect` process pays once before its first frame
 (importing numba, numba's first-use set-up, the kernels loaded from their cache, PyAV).
 
@@ -73,7 +73,7 @@ def per_frame(frames: list) -> dict[str, tuple[float, int]]:
         timed(det, "_search", "search", undo)
         timed(det, "_full", "full", undo)
         timed(pb, "whole_bgr", "whole", undo)
-        timed(pb, "hand_roi", "skin", undo)
+        timed(det, "_hand_roi", "skin", undo)
         t0 = time.process_time()
         for f in fresh:
             det.detect(f)
@@ -107,17 +107,20 @@ def main() -> None:
     frames = [f for _, _, f in iter_frames_i420(video)]
     parts, dec, once = per_frame(frames), decode_cpu(video), once_costs()
     total = parts["detect() in all"][0]
-    full, whole, skin = parts["full"][0], parts["whole"][0], parts["skin"][0]
-    window = parts["search"][0] - (full - skin)
+    full, skin = parts["full"][0], parts["skin"][0]
+    whole, n_whole = parts.get("whole", (0.0, 0))
+    region = full - skin  # _full calls _hand_roi, then _search
+    window = parts["search"][0] - region
     rows = [("detect() in all", total, video.n_frames),
             ("search of the window (kernel, on the planes)", window,
              video.n_frames - parts["full"][1]),
-            ("re-acquiring: the hand's whole region, in all", whole + full, parts["full"][1]),
-            ("  the whole frame to BGR (OpenCV)", whole, parts["full"][1]),
-            ("  the hand by skin colour at half size (OpenCV)", skin, parts["skin"][1]),
-            ("  search of the hand's region (kernel, BGR)", full - skin, parts["full"][1]),
-            ("the rest of detect() (bookkeeping, the next window)", total - window - full - whole,
-             "")]
+            ("re-acquiring: the hand's whole region, in all", full, parts["full"][1]),
+            ("  the hand by skin colour at half size (kernel, on the planes)", skin,
+             parts["skin"][1]),
+            ("  search of the hand's region (kernel, on the planes)", region, parts["full"][1]),
+            ("    of which the whole frame to BGR (OpenCV: the first frame's reference "
+             "histogram)", whole, n_whole),
+            ("the rest of detect() (bookkeeping, the next window)", total - window - full, "")]
     print(f"wrist-rom-01, {video.n_frames} frames; CPU µs per frame of all frames (best of "
           "3):\n")
     print("| part | µs per frame | calls | share of detect() |\n|---|---|---|---|")

@@ -101,8 +101,8 @@ def detection_rows(tmp: str) -> list[tuple]:
         rows.append((f"detect: {kind}, {name}", n, det, ref,
                      "≥ 1,500 frames/s and ≤ 2.5× decode-only"))
         if name in ("circle-01", "wrist-rom-01"):
-            rows.append((f"`armtrack detect {name} --json` (fresh process, its own frames/s; numba's "
-                         "set-up apart: kernel_setup_s)", n,
+            rows.append((f"`armtrack detect {name} --json` (fresh process, its own frames/s, the "
+                         "CSV included; one-time set-ups apart: kernel_setup_s, decoder_setup_s)", n,
                          n / _detect_cli(folder, Path(tmp) / "cli"), ref,
                          "≥ 1,500 frames/s and ≤ 2.5× decode-only"))
             # what the fresh process pays besides (palm_profile.py, patch_profile.py)

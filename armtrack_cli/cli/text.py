@@ -25,10 +25,10 @@ def detect_lines(folder: str, r: dict[str, Any]) -> list[str]:
                 f"{r['lost_spans']} losses (longest {r['longest_loss_s']} s)")
     else:
         line = f"{folder}: {r['blobs']} candidate blobs in {r['frames']} frames"
-    s = r.get("kernel_setup_s", 0)  # what frames/s leaves out
+    s = r.get("kernel_setup_s", 0) + r.get("decoder_setup_s", 0)  # what frames/s leaves out
     return [line + f", {r['frames_per_s']:.0f} frames/s -> {r['detections']}"] + (
-        [f"  (detection alone; its compiled kernel took {s:.1f} s to set up first)"]
-        if s >= 0.05 else [])
+        [f"  (detection alone; its compiled kernel and the decoder took {s:.1f} s to set up "
+         "first)"] if s >= 0.05 else [])
 
 
 def fuse_lines(folder: str, r: dict[str, Any]) -> list[str]:

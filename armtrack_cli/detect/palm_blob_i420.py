@@ -8,9 +8,10 @@ search_box on the BGR image OpenCV converts the planes to (cv2.COLOR_YUV2BGR_I42
 - Prefilter: a 2 x 2 block shares its chroma (U, V), so which luma values Y can make a pixel
   of that chroma a candidate is a property of (U, V) alone. The range [lowest, highest] of
   them is worked out (over all 256 Y) the first time a chroma is met, and kept in a table
-  of the detector's (y_table): a pixel outside its block's range cannot be a candidate; one
-  inside is converted and tested exactly. Most blocks (skin, background) have no such Y at
-  all, and cost one look-up.
+  of the detector's (y_table, both bounds in one 16-bit word: one load, no branch on an
+  empty range): a pixel outside its block's range cannot be a candidate; one inside is
+  converted and tested exactly. Most blocks (skin, background) have no such Y at all, and
+  cost one look-up.
 """
 
 from __future__ import annotations
@@ -21,13 +22,16 @@ from numba import njit
 from armtrack_cli.detect.palm_blob_kernel import _hsv, _inside, add, blobs_of
 from armtrack_cli.detect.yuv_pixel import i420_bgr
 
-UNSET = 257  # a chroma whose luma range has not been worked out yet
+# y_table's words: highest luma << 8 | lowest; no luma at all as lowest 1 > highest 0, and a
+# chroma not worked out yet as lowest 255 > highest 0 (an empty range is never stored so)
+EMPTY, UNSET = 0x0001, 0x00FF
 
 
 def y_table() -> np.ndarray:
-    """(65536, 2) int16: for each chroma (U * 256 + V) the lowest and highest luma of a
-    candidate pixel (lowest > highest: none); UNSET until first met. One per colour range."""
-    return np.full((1 << 16, 2), UNSET, np.int16)
+    """(65536,) uint16: for each chroma (U * 256 + V) the lowest and highest luma of a
+    candidate pixel (highest << 8 | lowest; EMPTY: none); UNSET until first met. One per
+    colour range."""
+    return np.full(1 << 16, UNSET, np.uint16)
 
 
 @njit(cache=True)
@@ -47,14 +51,15 @@ def _row_ranges(up, vp, cy, cx0, cx1, ytab, cand, sdiv, hdiv, lo, hi):
     """lo[i], hi[i] (i = 2 (cx - cx0) and the one after it): the luma range of the candidates
     of the row's blocks cx0 <= cx < cx1, from ytab (filled in where a chroma is new); an
     empty range as 1, 0 (uint8)."""
+    urow, vrow = up[cy], vp[cy]
     for cx in range(cx0, cx1):
-        k = np.int64(up[cy, cx]) * 256 + np.int64(vp[cy, cx])
-        if ytab[k, 0] == UNSET:
-            ytab[k, 0], ytab[k, 1] = _luma_range(np.int64(up[cy, cx]), np.int64(vp[cy, cx]),
-                                                 cand, sdiv, hdiv)
-        i, a, b = 2 * (cx - cx0), ytab[k, 0], ytab[k, 1]
-        if a > b:
-            a, b = 1, 0
+        u, v = np.int64(urow[cx]), np.int64(vrow[cx])
+        t = ytab[u * 256 + v]
+        if t == UNSET:
+            a, b = _luma_range(u, v, cand, sdiv, hdiv)
+            t = np.uint16(b << 8 | a) if a <= b else np.uint16(EMPTY)
+            ytab[u * 256 + v] = t
+        i, a, b = 2 * (cx - cx0), np.uint8(t & 255), np.uint8(t >> 8)
         lo[i], lo[i + 1], hi[i], hi[i + 1] = a, a, b, b
 
 
@@ -70,9 +75,9 @@ def _scan_i420(yp, up, vp, x0, y0, x1, y1, ytab, cand, core, sdiv, hdiv, label, 
     for y in range(y0, y1):
         if y == y0 or y % 2 == 0:
             _row_ranges(up, vp, y >> 1, x0 >> 1, (x1 + 1) >> 1, ytab, cand, sdiv, hdiv, lo, hi)
-        for j in range(w):  # vectorised: a superset of the candidates
-            yv = yp[y, x0 + j]
-            maybe[j] = (yv >= lo[j]) & (yv <= hi[j])
+        row = yp[y, x0:x1]  # a 1-D slice: the loop below compiles to vector instructions
+        for j in range(w):  # a superset of the candidates
+            maybe[j] = (row[j] >= lo[j]) & (row[j] <= hi[j])
         maybe[w:nw * 8] = 0
         for wj in range(nw):
             if words[wj] == 0:

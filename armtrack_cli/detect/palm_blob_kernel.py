@@ -45,6 +45,7 @@ class Work:
         self.core = np.empty(n, np.uint8)
         self.maybe = np.zeros((width + 7) // 8 * 8, np.uint8)  # one row's prefilter
         self.lo, self.hi = (np.empty((width + 7) // 8 * 8, np.uint8) for _ in range(2))
+        self.half = np.empty((height // 2, width // 2), np.uint8)  # the skin mask, halved
 
 
 @njit(cache=True, inline="always")

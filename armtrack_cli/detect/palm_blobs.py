@@ -52,7 +52,12 @@ def hand_roi(bgr: np.ndarray, margin: float) -> tuple[int, int, int, int] | None
     """(x0, y0, x1, y1) around the largest skin region, grown by ``margin``; None without skin.
     The region is found at half resolution: only its box is needed, and it is grown anyway."""
     small = cv2.resize(bgr, (bgr.shape[1] // 2, bgr.shape[0] // 2), interpolation=cv2.INTER_AREA)
-    m = cv2.morphologyEx(skin_mask(small), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    return roi_of_skin(skin_mask(small), margin, bgr.shape[:2])
+
+
+def roi_of_skin(half: np.ndarray, margin: float, shape) -> tuple[int, int, int, int] | None:
+    """hand_roi from the skin mask at half resolution ``half`` of an image of ``shape``."""
+    m = cv2.morphologyEx(half, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     regions = Regions(m)
     n, stats = regions.n, regions.stats
     if n < 2:
@@ -60,7 +65,7 @@ def hand_roi(bgr: np.ndarray, margin: float) -> tuple[int, int, int, int] | None
     k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     x, y, w, h = (2 * int(v) for v in stats[k, :4])
     gx, gy = int(margin * max(w, h)), int(margin * max(w, h))
-    H, W = bgr.shape[:2]
+    H, W = shape[:2]
     return max(0, x - gx), max(0, y - gy), min(W, x + w + gx), min(H, y + h + gy)
 
 
@@ -88,8 +93,9 @@ class PalmBlobDetector:
         self._cand = (lo, (min(180, self.high[0] + settings.hue_slack), 255, 255))
         self._kernel = None
         if compiled:  # numba's: imported only when a detector is made
-            from armtrack_cli.detect import palm_blob_i420, palm_blob_kernel
-            self._kernel, self._i420 = palm_blob_kernel, palm_blob_i420
+            from armtrack_cli.detect import palm_blob_i420, palm_blob_kernel, palm_blob_skin
+            self._kernel, self._i420, self._skin = palm_blob_kernel, palm_blob_i420, palm_blob_skin
+            self._skin_bounds = np.array([*SKIN_YCRCB[0], *SKIN_YCRCB[1]], np.int64)
             self._ytab = palm_blob_i420.y_table()
             cand = np.array([*self._cand[0], *self._cand[1]], np.int64)
             self._ranges = (cand, palm_blob_kernel.prefilter_bounds(cand),
@@ -114,6 +120,8 @@ class PalmBlobDetector:
                                        core, ref, 1.0, 1.0, 0.0, True, False, k.SDIV, k.HDIV,
                                        w.label, w.px, w.py, w.parent, w.bin, w.core, w.lo,
                                        w.hi, w.maybe)
+            self._skin.skin_half(p, q, q, self._skin_bounds, w.half)
+            roi_of_skin(w.half, 1.0, (2, 2))  # OpenCV's first use, as re-acquiring makes it
 
     def detect(self, frame) -> np.ndarray:
         """(k, 4) candidate blobs: u, v (sub-pixel centroid), area (px), score in [0, 1].
@@ -126,7 +134,7 @@ class PalmBlobDetector:
             if out is not None and len(out) < self._last_n:
                 out = None  # a blob may have left the window: search the hand's region
         if out is None:
-            out = self._full(whole_bgr(frame))
+            out = self._full(frame)
             self._since_full = 0
             self.full_searches += 1
         self._since_full += 1
@@ -142,22 +150,35 @@ class PalmBlobDetector:
         x1, y1 = np.ceil(blobs[:, :2].max(axis=0)).astype(int) + m + 1
         return max(0, x0) & ~1, max(0, y0) & ~1, min(shape[1], x1), min(shape[0], y1)
 
-    def _full(self, bgr: np.ndarray) -> np.ndarray:
-        """The hand's region by skin colour (re-acquisition)."""
-        roi = hand_roi(bgr, self.s.roi_margin)
+    def _full(self, frame) -> np.ndarray:
+        """The hand's region by skin colour (re-acquisition), searched on the frame as given."""
+        roi = self._hand_roi(frame)
         if roi is None:
             return np.zeros((0, 4))
-        return self._search(bgr, (roi[0] & ~1, roi[1] & ~1, roi[2], roi[3]), edge_fails=False)
+        return self._search(frame, (roi[0] & ~1, roi[1] & ~1, roi[2], roi[3]), edge_fails=False)
+
+    def _hand_roi(self, frame) -> tuple[int, int, int, int] | None:
+        """hand_roi of the frame: compiled, a YuvFrame's skin mask straight from its planes
+        (detect/palm_blob_skin.py: the same mask, without its BGR image)."""
+        planes = _planes_of(frame) if isinstance(frame, YuvFrame) else None
+        if self._kernel is None or planes is None:
+            return hand_roi(whole_bgr(frame), self.s.roi_margin)
+        half = self._work_for(frame.shape).half
+        self._skin.skin_half(*planes, self._skin_bounds, half)
+        return roi_of_skin(half, self.s.roi_margin, frame.shape)
+
+    def _work_for(self, shape):
+        """The kernels' work arrays (palm_blob_kernel.Work) for frames of this shape."""
+        if self._work is None or self._work.shape != shape[:2]:
+            self._work = self._kernel.Work(*shape[:2])
+        return self._work
 
     def _search(self, frame, box, *, edge_fails: bool) -> np.ndarray | None:
         """Candidates in box (x0, y0, x1, y1), x0 and y0 even, of a BGR image or a YuvFrame;
         None if edge_fails and a candidate touches an edge of the box that is not the image's."""
         if self._kernel is None or self.reference is None:
             return self._search_reference(whole_bgr(frame), box, edge_fails=edge_fails)
-        k, (H, W) = self._kernel, frame.shape[:2]
-        if self._work is None or self._work.shape != (H, W):
-            self._work = k.Work(H, W)
-        w, (cand, pre, core) = self._work, self._ranges
+        k, w, (cand, pre, core) = self._kernel, self._work_for(frame.shape), self._ranges
         args = (float(self.s.min_area_px), float(self.s.min_score), edge_fails,
                 self.s.centroid == "core", k.SDIV, k.HDIV, w.label, w.px, w.py, w.parent, w.bin,
                 w.core)

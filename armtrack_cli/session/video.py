@@ -128,6 +128,16 @@ def iter_frames_i420(video: VideoStream) -> Iterator[tuple[int, float, object]]:
         yield from iter_frames(video, decode_from=i)
 
 
+def load_decoder(video: VideoStream) -> None:
+    """Import PyAV now where iter_frames_i420 will decode with it: a fresh process's one-time
+    import (about 0.1 s of CPU), which would otherwise fall inside its first frame."""
+    if video.source == "file":
+        try:
+            import av  # noqa: F401
+        except ImportError:  # OpenCV will read it
+            pass
+
+
 def _pyav_frames(video: VideoStream) -> Iterator[tuple[int, object]]:
     """(index, YuvFrame or BGR image) for as many frames as PyAV decodes, at most n_frames."""
     try:
