@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from armtrack_cli.filters import gaussian
-from armtrack_cli.filters.particles import ess, moments, weights
+from armtrack_cli.filters.particles import ess, moments, resample_below, weights
 from armtrack_cli.filters.resampling import SCHEMES
 
 
@@ -127,3 +127,16 @@ def test_residual_keeps_the_integer_part_exactly():
 def test_weights_survive_impossible_and_tiny_likelihoods():
     np.testing.assert_allclose(weights(np.array([-np.inf, -np.inf, -np.inf])), 1 / 3)
     np.testing.assert_allclose(weights(np.array([-1e4, -1e4 - np.log(3)])), [0.75, 0.25])
+
+
+@pytest.mark.parametrize("n", [7, 300, 500, 5000, 50000])
+def test_equal_weights_are_never_resampled_for_round_off(n):
+    """With pf_resample_ess = 1 a PF resamples every frame whose weights differ; equal weights
+    (a frame without a detection) have ESS = N only to the last bits of Σ w², which a BLAS
+    build or a CPU may put on either side of N: resample_below keeps them above the line."""
+    for w in (np.full(n, 1.0 / n), np.full(n, 1.0) * (1.0 / n)):
+        assert ess(w) >= resample_below(1.0) * n
+        assert abs(ess(w) - n) < 1e-10 * n
+    w = np.full(n, 1.0 / n)
+    w[: n // 2] *= 1.01  # weights a detection made (here ESS/N = 1 − 2.5e-5) are resampled
+    assert ess(w / w.sum()) < resample_below(1.0) * n

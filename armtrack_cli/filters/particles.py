@@ -9,6 +9,13 @@ from __future__ import annotations
 import numpy as np
 
 
+def resample_below(share: float) -> float:
+    """The ESS share under which a particle filter resamples: ``share`` less round-off, so that
+    equal weights never count as degenerate (their ESS is N only to the last bits of Σ w²,
+    which differ between BLAS builds and CPUs: with share 1 a coin flip per frame)."""
+    return share * (1.0 - 1e-9)
+
+
 def weights(loglik: np.ndarray, prior: np.ndarray | None = None) -> np.ndarray:
     """Bayes' rule on the weights, w ∝ w_prior · p(z | x) (Tao & Hu eq. 14), normalised;
     computed from log-likelihoods so tiny likelihoods do not underflow. If every particle is

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from armtrack_cli.filters import gaussian
-from armtrack_cli.filters.particles import ess, moments, weights
+from armtrack_cli.filters.particles import ess, moments, resample_below, weights
 from armtrack_cli.filters.resampling import scheme
 from armtrack_cli.fuse import arm_smoother, imu_bias, robust
 from armtrack_cli.fuse.models import Arm, Projection, Steps
@@ -209,7 +209,7 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
             x[:, 3:] += v_gain * (v_ref[k] - mean[k, 3:])  # (fuse/imu_error.py)
         else:
             mean[k], cov[k] = moments(x, w)
-            if n_eff[k] < s.pf_resample_ess * N:
+            if n_eff[k] < resample_below(s.pf_resample_ess) * N:
                 x = x[resample(w, rng)]
                 w = np.full(N, 1.0 / N)
     return Estimates(mean, cov, n_eff, codes)
@@ -252,7 +252,7 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
-        float(s.pf_resample_ess), _guard(s, points), *vel)
+        resample_below(s.pf_resample_ess), _guard(s, points), *vel)
     return Estimates(mean, cov, n_eff, codes)
 
 
