@@ -164,7 +164,7 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
     e_w = draw_blocks(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else none
     e_a = (draw_blocks(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
            if inp.angles_sd is not None else none)
-    got: dict[tuple[str, str], list] = {k: [] for k in keys}
+    got: dict[tuple[str, str], list[np.ndarray]] = {k: [] for k in keys}  # (c,) a block
     path_draws = PathDraws(inp.t, windows, inp.task in REACH_TASKS, s)
     done = 0
     while done < s.draws:
@@ -174,6 +174,7 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
         if inp.wrist is not None:  # the elbow is the wrist moved by a known vector: its error
             wrist = inp.wrist[None] + (0.0 if ew is None else ew)
             by_path = path_draws(np.broadcast_to(wrist, (c, *inp.wrist.shape)))
+        ang = []
         for i in range(c):
             d = replace(inp, q_WB=None)  # the IMU's pronation has no posterior
             if ew is not None:
@@ -181,12 +182,13 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
                             elbow=None if inp.elbow is None else inp.elbow + ew[i])
             if ea is not None:
                 d = replace(d, wrist_angles=inp.wrist_angles + ea[i])
-            ang = angle_values(d, s)
-            for k, col in got.items():
-                v = by_path[k][i] if k in by_path else ang.get(k, "")
-                col.append(float(v) if not isinstance(v, str) else v)
+            ang.append(angle_values(d, s))
+        for k, col in got.items():
+            col.append(by_path[k] if k in by_path else
+                        np.array([v if isinstance(v, float) else np.nan
+                                  for v in (a.get(k, "") for a in ang)]))
         done += c
-    return {k: spread(col) for k, col in got.items()}
+    return {k: spread(np.concatenate(col)) for k, col in got.items()}
 
 
 def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None) -> list[dict]:

@@ -56,7 +56,13 @@ def smooth_draws(t: np.ndarray, sd: np.ndarray, s: Settings) -> Iterator[np.ndar
         yield from block
 
 
-def spread(samples: list[float]) -> float:
-    """SD of the computable draws; NaN when fewer than half of them gave a value."""
-    x = np.array([v for v in samples if isinstance(v, float) and np.isfinite(v)])
-    return float(np.std(x, ddof=1)) if x.size >= 2 and 2 * x.size >= len(samples) else float("nan")
+def spread(samples) -> float:
+    """SD of the computable draws (finite numbers: a string or NaN is a draw without one), a
+    list or an array; NaN when fewer than half of them gave a value."""
+    if isinstance(samples, np.ndarray):
+        x = np.asarray(samples, float)
+    else:
+        x = np.array([v if isinstance(v, float) else np.nan for v in samples], float)
+    n = x.size
+    x = x[np.isfinite(x)]
+    return float(np.std(x, ddof=1)) if x.size >= 2 and 2 * x.size >= n else float("nan")
