@@ -18,6 +18,7 @@ from armtrack_cli.measures.table import _path_values, values
 from armtrack_cli.measures.uncertainty import draw_blocks, spread
 
 S = Settings()
+pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")  # masked rows stay silent
 
 
 def laps(n_laps=4, fs=30.0, seed=0, rest=0.6):

@@ -92,6 +92,11 @@ def window_values(t: np.ndarray, o: np.ndarray, length: np.ndarray, p: np.ndarra
     """table._path_values of R windows at once (windows of draws): row r holds length[r]
     samples from sample o[r] of the clock t (M,) s, positions p (R, W, 3) m and speeds v (R, W)
     m/s, anything finite past them; dist (R,) the movement units' least peak spacing."""
+    with np.errstate(divide="ignore", invalid="ignore"):  # rows without a value: masked
+        return _window_values(t, o, length, p, v, dist, fs, reach, s)
+
+
+def _window_values(t, o, length, p, v, dist, fs, reach, s) -> Values:
     R, W = v.shape
     inside = np.arange(W) < length[:, None]
     k, vk, a, b = _spans(v, inside, s)
