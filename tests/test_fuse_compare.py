@@ -117,6 +117,23 @@ def _smoothed(folder, truth):
     return run("arm-smoother", p.inputs, x0, P0, p.projection, s, p.arm), p
 
 
+@pytest.mark.parametrize("name", ["circle", "occluded"])
+def test_converged_smoother_is_ten_iterations_within_the_step_tolerance(sessions, name,
+                                                                        monkeypatch):
+    """Gauss–Newton stopped by arm_smoother.converged equals it run for all of
+    smoother_iterations = 10 (no rule stopping it) to STEP_TOL_M (10 µm) in every wrist
+    position and SD: ten times the micrometre its predicted next step is allowed."""
+    from armtrack_cli.fuse import arm_smoother
+
+    got, _ = _smoothed(*sessions[name])
+    tol = arm_smoother.STEP_TOL_M
+    monkeypatch.setattr(arm_smoother, "STEP_TOL_M", 0.0)  # neither rule can stop it now
+    ten, _ = _smoothed(*sessions[name])
+    assert ten.summary["smoother_iterations"] == 10 > got.summary["smoother_iterations"]
+    assert np.abs(got.mean[:, :3] - ten.mean[:, :3]).max() < tol
+    assert np.abs(got.sd - ten.sd).max() < tol
+
+
 def test_no_jump_and_no_flip_through_occlusions(sessions):
     """0.5 s without detections: the estimate stays in the ±5 cm band, never jumps to the other
     intersection of ray and arm sphere (a 10-40 cm error), and its spread grows while blind."""

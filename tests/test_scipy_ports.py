@@ -58,9 +58,11 @@ def test_pchip_is_scipys_bit_for_bit():
         assert np.array_equal(pchip(x, y, xi), PchipInterpolator(x, y, axis=0)(xi))
 
 
-@pytest.mark.parametrize("grid_max", [200_000, 0])  # prominences on one grid, and one by one
-def test_find_peaks_is_scipys(grid_max, monkeypatch):
+@pytest.mark.parametrize("grid_max, table_max", [(200_000, peaks.TABLE_MAX), (0, peaks.TABLE_MAX),
+                                                 (0, 0)])  # on one grid, on tables, one by one
+def test_find_peaks_is_scipys(grid_max, table_max, monkeypatch):
     monkeypatch.setattr(peaks, "GRID_MAX", grid_max)
+    monkeypatch.setattr(peaks, "TABLE_MAX", table_max)
     rng = np.random.default_rng(3)
     for trial in range(1500):
         n = int(rng.integers(1, 300))

@@ -118,15 +118,16 @@ def _plain_run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm):
     X[:, :6] = first
     still = arm_smoother.resting(imu, tf, z, s, m_pre)
     rk = s.constraint_sigma_m**2
+    step = np.inf
     for _ in range(s.smoother_iterations):
         Hc, zc, Hk, zk = arm_smoother.linearise(X, z, q_hat, cam, arm, arm.shoulder)
         ins = rest.with_rows(still, s.rest_velocity_sd_m_s, rk, F, b, Q, Hc, zc,
                              np.isfinite(z).all(axis=1), Hk, zk, np.ones(tf.size, bool))
         Xn, _, _ = smooth(m0, Pm0, *ins.arrays[:6], s.pixel_sigma**2, *ins.arrays[6:], rk,
                           s.gate_chi2)
-        step = np.abs(Xn[ins.real, :3] - X[:, :3]).max()
+        previous, step = step, np.abs(Xn[ins.real, :3] - X[:, :3]).max()
         X = Xn[ins.real]
-        if step < arm_smoother.STEP_TOL_M:
+        if arm_smoother.converged(step, previous):
             break
     return X[m_pre:], still[m_pre:].sum()
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 GRID_MAX = 200_000  # peaks × samples up to which prominences are found on one grid
+TABLE_MAX = 1 << 15  # samples up to which they are found on sparse tables (8 MB at most)
 
 
 def local_maxima(x: np.ndarray) -> np.ndarray:
@@ -55,12 +56,54 @@ def _side_min(x: np.ndarray, p: int, step: int) -> float:
         w *= 4
 
 
+def _table(x: np.ndarray, op) -> list[np.ndarray]:
+    """Sparse table of ``op`` (np.maximum or np.minimum): level j holds op over x[i : i + 2^j]."""
+    out = [x]
+    while (1 << len(out)) <= x.size:
+        h = 1 << (len(out) - 1)
+        out.append(op(out[-1][:-h], out[-1][h:]))
+    return out
+
+
+def _range_min(mins: list[np.ndarray], lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """min x[lo : hi] (hi > lo) from the table of minima: two blocks of 2^j covering it."""
+    j = np.frexp(hi - lo)[1] - 1  # ⌊log2(hi − lo)⌋, exactly
+    out = np.empty(lo.size)
+    for lev in np.unique(j).tolist():
+        s = j == lev
+        m = mins[lev]
+        out[s] = np.minimum(m[lo[s]], m[hi[s] - (1 << lev)])
+    return out
+
+
+def _prominences_table(x: np.ndarray, peaks: np.ndarray) -> np.ndarray:
+    """prominences() for many peaks on a long signal: each side's run of samples not higher
+    than the peak found by binary lifting over a sparse table of maxima (the longest block
+    first), its minimum from a sparse table of minima. Exact: maxima, minima and comparisons
+    only, so the values are the grid's."""
+    n, top = x.size, x[peaks]
+    maxs, mins = _table(x, np.maximum), _table(x, np.minimum)
+    lo, hi = peaks.copy(), peaks + 1  # x[lo : p] and x[p + 1 : hi] not higher than x[p]
+    for lev in range(len(maxs) - 1, -1, -1):
+        m, w = maxs[lev], 1 << lev
+        c = lo - w
+        ok = c >= 0
+        ok[ok] = m[c[ok]] <= top[ok]
+        lo[ok] = c[ok]
+        ok = hi + w <= n
+        ok[ok] = m[hi[ok]] <= top[ok]
+        hi[ok] += w
+    return top - np.maximum(_range_min(mins, lo, peaks + 1), _range_min(mins, peaks, hi))
+
+
 def prominences(x: np.ndarray, peaks: np.ndarray) -> np.ndarray:
     """Each peak's height above the higher of the lowest points to its left and right, each
     searched up to the first sample higher than the peak. All peaks at once on a (peaks,
     samples) grid when that is small (a segment's: the same samples' minimum, so the same
-    values), else one peak at a time."""
+    values), else on sparse tables (``_prominences_table``), else one peak at a time."""
     if peaks.size * x.size > GRID_MAX:
+        if x.size <= TABLE_MAX:
+            return _prominences_table(x, peaks)
         return np.array([x[p] - max(_side_min(x, p, -1), _side_min(x, p, 1)) for p in peaks],
                         float)
     i = np.arange(x.size)
@@ -85,3 +128,35 @@ def find_peaks(x: np.ndarray, *, prominence: float, distance: int) -> np.ndarray
     if distance > 1 and peaks.size > 1:
         peaks = peaks[by_distance(peaks, x[peaks], int(np.ceil(distance)))]
     return peaks[prominences(x, peaks) >= prominence] if peaks.size else peaks
+
+
+def count_peaks_rows(x: np.ndarray, start: np.ndarray, length: np.ndarray, *,
+                     prominence: float, distance: int) -> np.ndarray:
+    """(R,) how many peaks ``find_peaks`` gives on each row's stretch x[r, start[r] : start[r]
+    + length[r]] of x (R, W), for many rows at once: the stretches laid end to end with +inf
+    between them (no peak touches one, no search passes one, and ≥ ``distance`` apart no peak
+    of one row is closer than ``distance`` to another's), a block of rows at a time
+    (≤ TABLE_MAX samples each, for the sparse tables). Peaks of exactly equal height closer
+    than ``distance`` may be taken in another order than one row alone takes them."""
+    R, W = x.shape
+    width = int(length.max(initial=0)) + max(int(distance), 1) + 1
+    per = max(1, TABLE_MAX // width)
+    out = np.zeros(R, int)
+    j = np.arange(width - 1)
+    for r0 in range(0, R, per):
+        r = np.arange(r0, min(r0 + per, R))
+        inside = j < length[r, None]
+        col = np.where(inside, start[r, None] + j, 0)
+        flat = np.full((r.size, width), np.inf)
+        flat[:, :-1] = np.where(inside, x[r[:, None], np.minimum(col, W - 1)], np.inf)
+        flat = flat.ravel()
+        pk = local_maxima(flat)
+        pk = pk[np.isfinite(flat[pk])]
+        if distance > 1 and pk.size > 1:
+            pk = pk[by_distance(pk, flat[pk], int(np.ceil(distance)))]
+        if pk.size:
+            prom = _prominences_table(flat, pk) if flat.size <= TABLE_MAX else \
+                prominences(flat, pk)  # a row longer than the tables take
+            kept = pk[prom >= prominence]
+            out[r] = np.bincount(kept // width, minlength=r.size)
+    return out

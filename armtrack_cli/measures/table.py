@@ -10,9 +10,10 @@ import numpy as np
 
 from armtrack_cli.measures import angles, path, smoothness
 from armtrack_cli.measures.base import DEFAULT, NotComputable, Settings
+from armtrack_cli.measures.draws import PathDraws
 from armtrack_cli.measures.segments import segments
 from armtrack_cli.measures.signal import speed_profile
-from armtrack_cli.measures.uncertainty import smooth_draws, spread
+from armtrack_cli.measures.uncertainty import draw_blocks, spread
 
 REACH_TASKS = ("reach", "reach-grasp")
 ANGLES = {  # name: unit with its convention
@@ -155,23 +156,39 @@ def values(inp: Inputs, s: Settings, windows: list | None = None
 
 
 def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[str, str], float]:
-    """SD of every measure over draws from the posterior (uncertainty.py)."""
+    """SD of every measure over draws from the posterior (uncertainty.py), a block of draws
+    at a time: the path measures of a block at once (draws.py), the angles draw by draw."""
     if inp.wrist_sd is None and inp.angles_sd is None:
         return {}
-    none = iter(lambda: None, 0)  # no posterior for this input: None for every draw
-    e_w = smooth_draws(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else none
-    e_a = (smooth_draws(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
+    none = iter(lambda: None, 0)  # no posterior for this input: None for every block
+    e_w = draw_blocks(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else none
+    e_a = (draw_blocks(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
            if inp.angles_sd is not None else none)
-    draws = []
-    for _, ew, ea in zip(range(s.draws), e_w, e_a):
-        d = inp
-        if ew is not None:  # the elbow is the wrist moved by a known vector: the same error
-            d = replace(d, wrist=inp.wrist + ew,
-                        elbow=None if inp.elbow is None else inp.elbow + ew)
-        if ea is not None:
-            d = replace(d, wrist_angles=inp.wrist_angles + ea)
-        draws.append(values(d, s, windows)[0])
-    return {k: spread([dr.get(k, "") for dr in draws]) for k in keys}
+    got: dict[tuple[str, str], list[np.ndarray]] = {k: [] for k in keys}  # (c,) a block
+    path_draws = PathDraws(inp.t, windows, inp.task in REACH_TASKS, s)
+    done = 0
+    while done < s.draws:
+        ew, ea = next(e_w), next(e_a)
+        c = (ew if ew is not None else ea).shape[0]
+        by_path = {}
+        if inp.wrist is not None:  # the elbow is the wrist moved by a known vector: its error
+            wrist = inp.wrist[None] + (0.0 if ew is None else ew)
+            by_path = path_draws(np.broadcast_to(wrist, (c, *inp.wrist.shape)))
+        ang = []
+        for i in range(c):
+            d = replace(inp, q_WB=None)  # the IMU's pronation has no posterior
+            if ew is not None:
+                d = replace(d, wrist=inp.wrist + ew[i],
+                            elbow=None if inp.elbow is None else inp.elbow + ew[i])
+            if ea is not None:
+                d = replace(d, wrist_angles=inp.wrist_angles + ea[i])
+            ang.append(angle_values(d, s))
+        for k, col in got.items():
+            col.append(by_path[k] if k in by_path else
+                        np.array([v if isinstance(v, float) else np.nan
+                                  for v in (a.get(k, "") for a in ang)]))
+        done += c
+    return {k: spread(np.concatenate(col)) for k, col in got.items()}
 
 
 def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None) -> list[dict]:

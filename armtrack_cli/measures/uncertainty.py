@@ -19,13 +19,17 @@ import numpy as np
 
 from armtrack_cli.measures.base import Settings
 
+BLOCK_SAMPLES = 1 << 16  # draws × frames of one block of draws (1.6 MB for 3 columns)
 
-def smooth_draws(t: np.ndarray, sd: np.ndarray, s: Settings) -> Iterator[np.ndarray]:
-    """s.draws zero-mean errors (N, d), one at a time (memory stays at one draw however long
-    the session), marginal SD sd (N, d) (NaN -> 0), correlation exp(−τ²/τc²) in time: white
-    noise smoothed by a Gaussian kernel of SD τc/2 (in frames at the median frame interval;
-    circular, so every frame has unit variance) and rescaled by 1/√(Σ kernel²). Draw i is the
-    i-th (N, d) block of one seeded stream of standard normals."""
+
+def draw_blocks(t: np.ndarray, sd: np.ndarray, s: Settings,
+                block_samples: int = BLOCK_SAMPLES) -> Iterator[np.ndarray]:
+    """s.draws zero-mean errors, a block of draws at a time (c, N, d), as many per block as
+    make block_samples frames (memory flat in the session's length), marginal SD sd (N, d)
+    (NaN -> 0), correlation exp(−τ²/τc²) in time: white noise smoothed by a Gaussian kernel
+    of SD τc/2 (in frames at the median frame interval; circular, so every frame has unit
+    variance) and rescaled by 1/√(Σ kernel²). Draw i is the i-th (N, d) block of one seeded
+    stream of standard normals, however the draws are grouped."""
     from scipy.ndimage import gaussian_filter1d  # here: compare's truth has no SD to draw from
 
     rng = np.random.default_rng(s.seed)
@@ -38,14 +42,27 @@ def smooth_draws(t: np.ndarray, sd: np.ndarray, s: Settings) -> Iterator[np.ndar
         delta = np.zeros(n)
         delta[0] = 1.0
         gain = np.sqrt(np.sum(gaussian_filter1d(delta, sigma, mode="wrap") ** 2))
-    for _ in range(s.draws):
-        w = rng.standard_normal((n, d))
+    per = max(1, block_samples // max(n, 1))
+    for first in range(0, s.draws, per):
+        w = rng.standard_normal((min(per, s.draws - first), n, d))
         if sigma >= 0.1:
-            w = gaussian_filter1d(w, sigma, axis=0, mode="wrap") / gain
+            w = gaussian_filter1d(w, sigma, axis=1, mode="wrap") / gain
         yield w * sd
 
 
-def spread(samples: list[float]) -> float:
-    """SD of the computable draws; NaN when fewer than half of them gave a value."""
-    x = np.array([v for v in samples if isinstance(v, float) and np.isfinite(v)])
-    return float(np.std(x, ddof=1)) if x.size >= 2 and 2 * x.size >= len(samples) else float("nan")
+def smooth_draws(t: np.ndarray, sd: np.ndarray, s: Settings) -> Iterator[np.ndarray]:
+    """The draws of ``draw_blocks`` one at a time (N, d)."""
+    for block in draw_blocks(t, sd, s, block_samples=1):
+        yield from block
+
+
+def spread(samples) -> float:
+    """SD of the computable draws (finite numbers: a string or NaN is a draw without one), a
+    list or an array; NaN when fewer than half of them gave a value."""
+    if isinstance(samples, np.ndarray):
+        x = np.asarray(samples, float)
+    else:
+        x = np.array([v if isinstance(v, float) else np.nan for v in samples], float)
+    n = x.size
+    x = x[np.isfinite(x)]
+    return float(np.std(x, ddof=1)) if x.size >= 2 and 2 * x.size >= n else float("nan")
