@@ -4,16 +4,18 @@ drifting arm: the upper arm's length change ℓ and the shoulder S) estimated ov
 session at once, as a Gauss–Newton iterated extended
 Kalman smoother. Equations and their derivation: docs/fusion.md.
 
-State, d = 15 (19 with the drifting shoulder):  x = (p, v, δθ, b_a, b_g[, ℓ, S])  in W, m, m/s,
-rad, m/s², rad/s, m (b_g in B); d = 12 (16) without a gyroscope, or orientation_model =
-"gauss-markov".
+State, d = 15 (19 with the drifting shoulder):  x = (p, v, δθ, b_a, b_g[, c][, ℓ, S])  in W, m,
+m/s, rad, m/s², rad/s, m (b_g in B); d = 12 (16) without a gyroscope, or orientation_model =
+"gauss-markov"; six more with camera_pose = "board": c = (φ, τ), the camera pose's correction
+(fuse/camera_pose.py), static, its prior the board's covariance.
   - process (Tao & Hu eqs. 4–6 with both IMU errors): fuse/imu_fold.py, linear given the IMU;
     δθ changes as the gyroscope says (imu_fold.orientation_track: the output orientation's
     rotation against the gyro's, plus G b_g for the gyro's bias) with a small random walk
     (orientation_walk_deg); without a gyro, first-order Gauss–Markov (SD orientation_sd_deg,
     time constant orientation_tau_s); b_a, b_g slow random walks; ℓ and S random walks from
     the declared arm (``drift_noise``, ``drift_prior``);
-  - camera (eq. 7): the patch pixel π(p), σ = pixel_sigma, gated by χ² (gate_chi2);
+  - camera (eq. 7): the patch pixel π(p) (π(p; c) with the pose's correction), σ =
+    pixel_sigma, gated by χ² (gate_chi2);
   - arm (eq. 15): |p − L2 u − S| − (L1 + ℓ) = 0 ± constraint_sigma_m, with the forearm
     u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
 Each iteration linearises camera and arm about the current smoothed trajectory and runs one
@@ -28,7 +30,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse import imu_fold, rest
+from armtrack_cli.fuse import camera_pose, imu_fold, rest
 from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
@@ -77,6 +79,13 @@ class Smoothed:
 DRIFT = 4  # the drifting arm's states, the state's last: ℓ (m), then S (3, m in W)
 
 
+def camera_slice(d: int, drifting: bool) -> slice:
+    """The camera pose's correction c (camera_pose.POSE states) in a state of size d: just
+    before the drifting arm's (ℓ, S) where there is one, else the last."""
+    end = d - DRIFT * drifting
+    return slice(end - camera_pose.POSE, end)
+
+
 def shoulder_slice(d: int) -> slice:
     """The drifting shoulder's place in a state of size d: always the last three."""
     return slice(d - 3, d)
@@ -111,11 +120,13 @@ def orientation_var(s: FuseSettings) -> np.ndarray:
 
 
 def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
-            imu_period: float, track: imu_fold.OrientationTrack | None = None
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            imu_period: float, track: imu_fold.OrientationTrack | None = None,
+            camera: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """F (n, d, d), b (n, d), Q (n, d, d) of the augmented state's steps (index 0 unused);
-    with ``track`` (the gyro's) δθ follows it and the state holds the gyro bias b_g."""
-    n, d = fd.dt.size, 12 + 3 * (track is not None) + DRIFT * (shoulder is not None)
+    with ``track`` (the gyro's) δθ follows it and the state holds the gyro bias b_g; with
+    ``camera`` the pose's correction c, static (F = I, Q = 0)."""
+    n = fd.dt.size
+    d = 12 + 3 * (track is not None) + camera_pose.POSE * camera + DRIFT * (shoulder is not None)
     dt = fd.dt[:, None, None]
     eye = np.eye(3)
     F = np.tile(np.eye(d), (n, 1, 1))
@@ -144,19 +155,7 @@ def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
 
 def projection_jacobians(proj: Projection, p: np.ndarray) -> np.ndarray:
     """∂π/∂p (n, 2, 3) at points p (n, 3): Projection.jacobian for every point at once."""
-    X = p @ proj.R.T + proj.T
-    x, y, Z = X[:, 0] / X[:, 2], X[:, 1] / X[:, 2], X[:, 2]
-    r2 = x * x + y * y
-    rad = 1 + r2 * (proj.k1 + r2 * (proj.k2 + r2 * proj.k3))
-    D = proj.k1 + 2 * proj.k2 * r2 + 3 * proj.k3 * r2 * r2  # ∂rad/∂r²
-    off = 2 * x * y * D + 2 * proj.p1 * x + 2 * proj.p2 * y
-    Jd = np.stack([np.stack([rad + 2 * x * x * D + 2 * proj.p1 * y + 6 * proj.p2 * x, off], -1),
-                   np.stack([off, rad + 2 * y * y * D + 6 * proj.p1 * y + 2 * proj.p2 * x], -1)],
-                  -2)
-    zero = np.zeros_like(Z)
-    Jn = np.stack([np.stack([1 / Z, zero, -X[:, 0] / Z**2], -1),
-                   np.stack([zero, 1 / Z, -X[:, 1] / Z**2], -1)], -2)
-    return proj._f[None, :, None] * (Jd @ Jn @ proj.R)
+    return camera_pose.pixel_jacobians(proj, camera_pose.in_camera(proj, p)) @ proj.R
 
 
 def corrected(q_hat: np.ndarray, dtheta: np.ndarray) -> np.ndarray:
@@ -172,14 +171,20 @@ def forearm(q_hat: np.ndarray, dtheta: np.ndarray, arm: Arm) -> np.ndarray:
 
 
 def linearise(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, arm: Arm,
-              shoulder: np.ndarray | None):
+              shoulder: np.ndarray | None, camera: bool = False):
     """Camera rows (Hc (n, 2, d), zc (n, 2)) and arm row (Hk (n, d), zk (n,)) linearised about
     the trajectory X (n, d): h(x) ≈ h(x̄) + H (x − x̄), written as z' = H x with
     z' = z − h(x̄) + H x̄ (camera) and z' = H x̄ − r(x̄) (arm, whose measurement is r = 0).
-    ``shoulder`` None: the drifting arm, the state's last four (ℓ, S)."""
+    ``shoulder`` None: the drifting arm, the state's last four (ℓ, S); ``camera``: the
+    state holds the pose's correction c (camera_slice), the projection is moved by it."""
     n, d = X.shape
     p = X[:, P_]
     Hc = np.zeros((n, 2, d))
+    if camera:  # c is static: one pose for the block, its mean (equal on every frame)
+        cs = camera_slice(d, shoulder is None)
+        c = X[:, cs].mean(axis=0)
+        Hc[:, :, cs] = camera_pose.pose_jacobians(proj, p, c)
+        proj = camera_pose.moved(proj, c)
     Hc[:, :, P_] = projection_jacobians(proj, p)  # eq. 7
     zc = np.where(np.isfinite(z), z, 0.0) - proj(p) + np.einsum("kij,kj->ki", Hc, X)
     u = forearm(q_hat, X[:, TH], arm)
@@ -199,17 +204,24 @@ def linearise(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection,
 
 
 def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
-          shoulder: np.ndarray | None, gyro: bool = False) -> tuple[np.ndarray, np.ndarray]:
+          shoulder: np.ndarray | None, gyro: bool = False,
+          pose_cov: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The first frame's prior: (p, v) as the other methods start, δθ, b_a (, b_g) about
-    zero, (ℓ, S) about the declared arm (``drift_prior``), and then the first wrist, which
-    the pipeline placed on the declared sphere, as uncertain as that sphere."""
-    d = 12 + 3 * gyro + DRIFT * (shoulder is not None)
+    zero, the camera pose's correction c about zero as uncertain as the board left it
+    (``pose_cov``, when given), (ℓ, S) about the declared arm (``drift_prior``), and then
+    the first wrist, which the pipeline placed on the declared sphere, as uncertain as that
+    sphere."""
+    d = (12 + 3 * gyro + camera_pose.POSE * (pose_cov is not None)
+         + DRIFT * (shoulder is not None))
     m, P = np.zeros(d), np.zeros((d, d))
     m[:6], P[:6, :6] = x0, P0
     P[TH, TH] = orientation_var(s)
     P[BA, BA] = s.accel_bias_sd**2 * np.eye(3)
     if gyro:
         P[BG, BG] = np.deg2rad(s.gyro_bias_sd_deg_s) ** 2 * np.eye(3)
+    if pose_cov is not None:
+        cs = camera_slice(d, shoulder is not None)
+        P[cs, cs] = pose_cov
     if shoulder is not None:
         DR = drift_slice(d)
         m[DR], P[DR, DR] = drift_prior(shoulder, s)
@@ -253,7 +265,8 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     period = float(np.median(np.diff(imu.t)))
     gyro = s.orientation_model == "gyro" and imu.gyro()
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
-    m0, Pm0 = prior(x0, P0, s, shoulder, gyro)
+    camera = s.camera_pose == "board" and proj.pose_cov is not None
+    m0, Pm0 = prior(x0, P0, s, shoulder, gyro, proj.pose_cov if camera else None)
     X = np.zeros((t_frames.size, m0.size))
     X[:, :6] = first
     if shoulder is not None:
@@ -262,14 +275,15 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     use_k = np.ones(t_frames.size, bool)
     still = resting(imu, t_frames, z, s, m_pre)
     X, var, elbow_var, gated, iterations = _iterate(fd, track, period, (m0, Pm0), X, z, q_hat,
-                                                    proj, s, arm, shoulder, use_c, use_k, still)
+                                                    proj, s, arm, shoulder, use_c, use_k, still,
+                                                    camera)
     X, q_hat = X[m_pre:], q_hat[m_pre:]  # the video's frames
     return Smoothed(X, var[m_pre:], corrected(q_hat, X[:, TH]), elbow_var[m_pre:],
                     gated[m_pre:], iterations, gyro)
 
 
 def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
-             still) -> tuple:
+             still, camera=False) -> tuple:
     """run()'s Gauss–Newton iterations, each a checkpointed pass (fuse/smoother_blocks.py:
     equal to the plain pass, memory flat in the session's length): the model built a block of
     frames at a time, with the zero-velocity rows of its resting frames (``still``,
@@ -286,8 +300,9 @@ def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use
 
         def model(lo: int, hi: int, X=X) -> tuple:  # the steps and rows of frames lo … hi − 1
             F, b, Q = process(_rows(fd, lo, hi), s, shoulder, period,
-                              None if track is None else _rows(track, lo, hi))
-            Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed)
+                              None if track is None else _rows(track, lo, hi), camera)
+            Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed,
+                                       camera)
             arrays = (F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi])
             if not still[lo:hi].any():
                 return arrays

@@ -112,10 +112,12 @@ def composite_steps(t_imu: np.ndarray, a_W: np.ndarray, t_frames: np.ndarray, *,
 
 class Projection:
     """Pinhole projection with OpenCV's distortion k1 k2 p1 p2 k3 (Tao & Hu eq. 7 with the lens
-    the camera really has), vectorised over points, with its analytic Jacobian."""
+    the camera really has), vectorised over points, with its analytic Jacobian. ``pose_cov``:
+    the (6, 6) covariance of its pose's correction (fuse/camera_pose.py), where known."""
 
-    def __init__(self, cam: CameraModel):
+    def __init__(self, cam: CameraModel, pose_cov: np.ndarray | None = None):
         self.K, self.R, self.T = cam.K, cam.R_WC, cam.T_WC
+        self.pose_cov = pose_cov
         d = np.zeros(5)
         d[: min(5, cam.dist.size)] = cam.dist[:5]
         self.k1, self.k2, self.p1, self.p2, self.k3 = d

@@ -13,6 +13,7 @@ SHOULDERS = ("fixed", "drifting")
 HOLDS = ("linear", "sample")  # fuse/imu_fold.py
 IMU_ERRORS = ("none", "causal")  # pf-constraint's a_W correction (fuse/imu_error.py)
 ORIENTATION_MODELS = ("gyro", "gauss-markov")  # fuse/arm_smoother.py
+CAMERA_POSES = ("fixed", "board")  # fuse/camera_pose.py
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,9 @@ class FuseSettings:
     upper_arm_offset_m: float = 0.0  # … and its radius this far from the declared upper arm
     rest_velocity_sd_m_s: float = 0.0  # > 0: where the hand rests (fuse/rest.py) its velocity is
     #                                    zero within this SD (m/s, per axis); 0: off
+    camera_pose: str = "fixed"  # arm-smoother: "fixed", the board's pose as calibrate solved it;
+    #                            "board", corrected with it from the board's covariance as prior
+    #                            (fuse/camera_pose.py)
     pre_roll_s: float = 1.0  # with the rest update: the arm smoother starts this long before the
     #                          first frame where the IMU recorded before it (fuse/arm_smoother.py)
 
@@ -119,7 +123,8 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
                           "0 ≤ kalman_velocity ≤ 1, kalman_passes ≥ 1")
     for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS),
                               ("imu_error", s.imu_error, IMU_ERRORS),
-                              ("orientation_model", s.orientation_model, ORIENTATION_MODELS)):
+                              ("orientation_model", s.orientation_model, ORIENTATION_MODELS),
+                              ("camera_pose", s.camera_pose, CAMERA_POSES)):
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",
                               did_you_mean(value, valid, what="choices"))

@@ -15,7 +15,7 @@ from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
 from armtrack_cli.core.methods import DEFAULT_FOR_KIND, NEEDS, PALM_METHODS
-from armtrack_cli.fuse import models, robust
+from armtrack_cli.fuse import camera_pose, models, robust
 from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.methods import Inputs, load_kernels, run
@@ -81,6 +81,11 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
         arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
                          L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
     proj = models.Projection(cam)
+    board = session.camera.board
+    if board is not None and cam.reprojection_error_px:  # the pose's own uncertainty
+        proj.pose_cov = camera_pose.board_covariance(
+            proj, camera_pose.board_corners_W(board.squares, board.square_m),
+            cam.reprojection_error_px)
     known = arm if session.arm is None or not session.arm.auto else None  # "auto": not yet
     q_anch = gyro_anchored(imu.t[ok], q_imu, imu.gyr[ok])
     offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_anch,
