@@ -24,12 +24,14 @@ from __future__ import annotations
 
 import functools
 
+import cv2
 import numpy as np
 from numba import njit
 
 from armtrack_cli.detect.camshift_kernel import camshift, region_at
 from armtrack_cli.detect.colour import HUE_BINS
 from armtrack_cli.detect.palm_blob_kernel import HDIV, SDIV, _hsv, _maybe_row, prefilter_bounds
+from armtrack_cli.detect.patch_acquire_kernel import FrameRegions, Labels, regions_of
 from armtrack_cli.detect.patch_check import Look, aspect_of
 from armtrack_cli.detect.yuv_pixel import i420_bgr
 from armtrack_cli.vision.yuv import YuvFrame
@@ -148,32 +150,49 @@ def hsv_mask_bgr(bgr, x0, y0, x1, y1, rng, pre, row, maybe, hue, mask):
     return c0, r0, c1, r1
 
 
-@njit(cache=True)
-def _min3(src, dst, h, w, erode):
-    """dst = the 3 x 3 minimum (erode) or maximum of src[:h, :w], pixels outside ignored:
-    across each row, then down each column (through dst's own rows, kept in a rolling
-    pair)."""
+@njit(cache=True, nogil=True)
+def _across(src, dst, h, w, erode):
+    """dst[:h, :w] = the minimum (erode) or maximum of each pixel of src and its left and right
+    neighbours (those outside ignored); branch-free inner loops, which LLVM vectorises."""
     for r in range(h):
-        for c in range(w):
-            a = src[r, c]
-            lo = src[r, c - 1] if c > 0 else a
-            hi = src[r, c + 1] if c + 1 < w else a
-            dst[r, c] = min(a, min(lo, hi)) if erode else max(a, max(lo, hi))
-    for c in range(w):
-        prev = dst[0, c]
-        for r in range(h):
-            a = dst[r, c]
-            nxt = dst[r + 1, c] if r + 1 < h else a
-            dst[r, c] = min(prev, min(a, nxt)) if erode else max(prev, max(a, nxt))
-            prev = a
+        a, d = src[r], dst[r]
+        if w == 1:
+            d[0] = a[0]
+            continue
+        if erode:
+            d[0], d[w - 1] = min(a[0], a[1]), min(a[w - 2], a[w - 1])
+            for c in range(1, w - 1):
+                d[c] = min(a[c - 1], min(a[c], a[c + 1]))
+        else:
+            d[0], d[w - 1] = max(a[0], a[1]), max(a[w - 2], a[w - 1])
+            for c in range(1, w - 1):
+                d[c] = max(a[c - 1], max(a[c], a[c + 1]))
+
+
+@njit(cache=True, nogil=True)
+def _down(src, dst, h, w, erode):
+    """dst[:h, :w] = the minimum (erode) or maximum of each pixel of src and its upper and
+    lower neighbours (those outside ignored), row by row (contiguous, vectorised)."""
+    for r in range(h):
+        up, mid, dn = src[max(r - 1, 0)], src[r], src[min(r + 1, h - 1)]
+        d = dst[r]
+        if erode:
+            for c in range(w):
+                d[c] = min(up[c], min(mid[c], dn[c]))
+        else:
+            for c in range(w):
+                d[c] = max(up[c], max(mid[c], dn[c]))
 
 
 @njit(cache=True)
 def open3(mask, tmp, h, w):
     """mask[:h, :w] opened by a 3 x 3 square in place (erode, then dilate; pixels outside the
-    region are ignored, as cv2.morphologyEx's default border does)."""
-    _min3(mask, tmp, h, w, True)
-    _min3(tmp, mask, h, w, False)
+    region are ignored, as cv2.morphologyEx's default border does): each a pass across the
+    rows and one down the columns (the square is separable), through ``tmp``."""
+    _across(mask, tmp, h, w, True)
+    _down(tmp, mask, h, w, True)
+    _across(mask, tmp, h, w, False)
+    _down(tmp, mask, h, w, False)
 
 
 @njit(cache=True)
@@ -246,6 +265,7 @@ class WindowTracker:
         self.pre = prefilter_bounds(self.rng)
         self.table = _chroma_table(tuple(self.rng))
         self.work: Work | None = None
+        self.labels: Labels | None = None
 
     def _work(self, frame) -> Work:
         k = self.work
@@ -261,6 +281,22 @@ class WindowTracker:
         box = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng, self.table, k.hue,
                             k.mask, k.cols)
         return k.hue[:H, :W], k.mask[:H, :W], opened_box(k.mask, k.tmp, H, W, box)
+
+    def whole_regions(self, frame, min_area: int, hsv_mask=None) -> FrameRegions:
+        """The acquiring pass on the whole frame: the regions of its opened mask (whole_mask
+        of a YuvFrame, else ``hsv_mask`` = (HSV image, its opened mask) as given) with the
+        CamShift box and look of each of min_area pixels or more."""
+        H, W = frame.shape[:2]
+        if hsv_mask is None:
+            hue, mask, box = self.whole_mask(frame)
+        else:
+            hue, mask = hsv_mask[0][:, :, 0], hsv_mask[1]
+            box = cv2.boundingRect(mask)
+        lab = self.labels
+        if lab is None or lab.shape[0] < H or lab.shape[1] < W:
+            lab = self.labels = Labels(H, W)
+        found = regions_of(mask, hue, *box, min_area, lab.labels, lab.parent, lab.res)
+        return FrameRegions(found, (H, W))
 
     def track(self, frame, box, start):
         x0, y0, x1, y1 = box
