@@ -87,21 +87,33 @@ def chroma_table(rng):
     return out
 
 
-@njit(cache=True)
-def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols):
+def chroma_bounds(table: np.ndarray) -> np.ndarray:
+    """(u0, du, v0, dv) int64: every 1 of ``table`` (chroma_table) has u0 ≤ U ≤ u0 + du and
+    v0 ≤ V ≤ v0 + dv (du = dv = -1 when it has none)."""
+    us, vs = np.nonzero(table)
+    if us.size == 0:
+        return np.array([0, -1, 0, -1], np.int64)
+    return np.array([us.min(), us.max() - us.min(), vs.min(), vs.max() - vs.min()], np.int64)
+
+
+@njit(cache=True, nogil=True)
+def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, bounds, hue, mask, cols):
     """hue[:h, :w] and the range mask (255 in range) of the frame's [y0:y1, x0:x1], the hue
     only where the mask is 255: each pixel converted (OpenCV's YUV2BGR_I420, then BGR2HSV)
-    only where its chroma's ``table`` (chroma_table(rng)) entry is 1 (``cols``: scratch of
-    a chroma row's length). Returns the box (c0, r0, c1, r1) of the mask's pixels (c1 = 0
-    when there are none)."""
+    only where its chroma's ``table`` (chroma_table(rng)) entry is 1, looked up only for
+    chroma inside ``bounds`` (chroma_bounds(table): most of a frame is outside, and the
+    test costs less than the table's read) (``cols``: scratch of a chroma row's length).
+    Returns the box (c0, r0, c1, r1) of the mask's pixels (c1 = 0 when there are none)."""
     c0, r0, c1, r1 = x1 - x0, y1 - y0, 0, 0
     for r in range(y1 - y0):
         mask[r, :x1 - x0] = 0
+    u0, du, v0, dv = bounds[0], bounds[1], bounds[2], bounds[3]
     for cy in range(y0 >> 1, ((y1 - 1) >> 1) + 1):
         urow, vrow = up[cy], vp[cy]
         n = 0
         for cx in range(x0 >> 1, ((x1 - 1) >> 1) + 1):  # the 2 x 2 blocks that may hold it
-            if table[urow[cx], vrow[cx]]:
+            cu, cv = np.int64(urow[cx]) - u0, np.int64(vrow[cx]) - v0
+            if 0 <= cu <= du and 0 <= cv <= dv and table[urow[cx], vrow[cx]]:
                 cols[n] = cx
                 n += 1
         for y in range(max(2 * cy, y0), min(2 * cy + 2, y1)):
@@ -119,7 +131,7 @@ def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols):
     return c0, r0, c1, r1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _mask_row(row, n, rng, pre, maybe, hue, mask, r):
     """Hue and range mask (255 in range) of a flat BGR row of n pixels into hue[r], mask[r]:
     palm_blob_kernel._maybe_row's vectorised superset first, the exact test on what it
@@ -135,7 +147,7 @@ def _mask_row(row, n, rng, pre, maybe, hue, mask, r):
         mask[r, c] = 255 if _in_range(h, s, v, rng) else 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def hsv_mask_bgr(bgr, x0, y0, x1, y1, rng, pre, row, maybe, hue, mask):
     """hsv_mask_i420 for a BGR image."""
     for r in range(y1 - y0):
@@ -184,7 +196,7 @@ def _down(src, dst, h, w, erode):
                 d[c] = max(up[c], max(mid[c], dn[c]))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def open3(mask, tmp, h, w):
     """mask[:h, :w] opened by a 3 x 3 square in place (erode, then dilate; pixels outside the
     region are ignored, as cv2.morphologyEx's default border does): each a pass across the
@@ -195,7 +207,7 @@ def open3(mask, tmp, h, w):
     _down(tmp, mask, h, w, False)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def opened_box(mask, tmp, H, W, box):
     """mask[:H, :W] opened (open3) on ``box`` (c0, r0, c1, r1: its pixels' box) grown by 2 px,
     outside which the opening is 0 anyway; returns the opened mask's box (x, y, w, h), as
@@ -215,7 +227,7 @@ def opened_box(mask, tmp, H, W, box):
     return x0, y0, x1 - x0, y1 - y0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def track_tail(hue, mask, tmp, H, W, box, sx, sy, sw, sh, niters, seen, stack, counts, res):
     """After the HSV pass (``box``: its mask's box): the opening, CamShift from window (sx,
     sy, sw, sh), and the region under its centre (res as camshift and region_at fill it;
@@ -239,18 +251,18 @@ def track_tail(hue, mask, tmp, H, W, box, sx, sy, sw, sh, niters, seen, stack, c
 
 
 @functools.lru_cache(maxsize=8)
-def _chroma_table(rng: tuple) -> np.ndarray:
-    """chroma_table, once per colour range in a process (about 0.1 s)."""
+def _chroma_table(rng: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """chroma_table and its chroma_bounds, once per colour range in a process (about 0.1 s)."""
     table = chroma_table(np.array(rng, np.int64))
     table.flags.writeable = False
-    return table
+    return table, chroma_bounds(table)
 
 
-@njit(cache=True)
-def track_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, tmp, cols, start, niters,
-               seen, stack, counts, res):
+@njit(cache=True, nogil=True)
+def track_i420(yp, up, vp, x0, y0, x1, y1, rng, table, bounds, hue, mask, tmp, cols, start,
+               niters, seen, stack, counts, res):
     """hsv_mask_i420 then track_tail, in one call (one dispatch from Python a frame)."""
-    box = hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols)
+    box = hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, bounds, hue, mask, cols)
     track_tail(hue, mask, tmp, y1 - y0, x1 - x0, box, start[0], start[1], start[2], start[3],
                niters, seen, stack, counts, res)
 
@@ -263,7 +275,7 @@ class WindowTracker:
     def __init__(self, low, high):
         self.rng = np.array([*(int(v) for v in low), *(int(v) for v in high)], np.int64)
         self.pre = prefilter_bounds(self.rng)
-        self.table = _chroma_table(tuple(self.rng))
+        self.table, self.bounds = _chroma_table(tuple(self.rng))
         self.work: Work | None = None
         self.labels: Labels | None = None
 
@@ -278,8 +290,8 @@ class WindowTracker:
         (patch_masks.patch_mask of its HSV; views of work arrays, valid until the next call)
         and the mask's box (x, y, w, h) as cv2.boundingRect gives it."""
         k, (H, W) = self._work(frame), frame.shape[:2]
-        box = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng, self.table, k.hue,
-                            k.mask, k.cols)
+        box = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng, self.table,
+                            self.bounds, k.hue, k.mask, k.cols)
         return k.hue[:H, :W], k.mask[:H, :W], opened_box(k.mask, k.tmp, H, W, box)
 
     def whole_regions(self, frame, min_area: int, hsv_mask=None) -> FrameRegions:
@@ -303,8 +315,9 @@ class WindowTracker:
         H, W = y1 - y0, x1 - x0
         k = self._work(frame)
         if isinstance(frame, YuvFrame):
-            track_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng, self.table, k.hue,
-                       k.mask, k.tmp, k.cols, start, NITERS, k.seen, k.stack, k.counts, k.res)
+            track_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng, self.table,
+                       self.bounds, k.hue, k.mask, k.tmp, k.cols, start, NITERS, k.seen, k.stack,
+                       k.counts, k.res)
         else:
             box = hsv_mask_bgr(frame, x0, y0, x1, y1, self.rng, self.pre, k.row, k.maybe,
                                k.hue, k.mask)
