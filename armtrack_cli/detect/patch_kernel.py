@@ -107,15 +107,24 @@ def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, bounds, hue, mask, col
     c0, r0, c1, r1 = x1 - x0, y1 - y0, 0, 0
     for r in range(y1 - y0):
         mask[r, :x1 - x0] = 0
-    u0, du, v0, dv = bounds[0], bounds[1], bounds[2], bounds[3]
+    # the bounds as uint8: U - u0 wraps below u0, so one unsigned test each (vectorised); with
+    # no bounds (du = -1: 255) every block is looked up in the table
+    u0, du = np.uint8(bounds[0]), np.uint8(bounds[1] & 255)
+    v0, dv = np.uint8(bounds[2]), np.uint8(bounds[3] & 255)
+    ca, cb = x0 >> 1, ((x1 - 1) >> 1) + 1  # the chroma columns
     for cy in range(y0 >> 1, ((y1 - 1) >> 1) + 1):
         urow, vrow = up[cy], vp[cy]
+        some = 0
+        for j in range(cb - ca):  # the 2 x 2 blocks inside the bounds, flagged in cols
+            f = (np.uint8(urow[ca + j] - u0) <= du) & (np.uint8(vrow[ca + j] - v0) <= dv)
+            cols[j] = f
+            some |= f
         n = 0
-        for cx in range(x0 >> 1, ((x1 - 1) >> 1) + 1):  # the 2 x 2 blocks that may hold it
-            cu, cv = np.int64(urow[cx]) - u0, np.int64(vrow[cx]) - v0
-            if 0 <= cu <= du and 0 <= cv <= dv and table[urow[cx], vrow[cx]]:
-                cols[n] = cx
-                n += 1
+        if some:
+            for j in range(cb - ca):  # … and kept where the table has them (n <= j: in place)
+                if cols[j] and table[urow[ca + j], vrow[ca + j]]:
+                    cols[n] = ca + j
+                    n += 1
         for y in range(max(2 * cy, y0), min(2 * cy + 2, y1)):
             r = y - y0
             for k in range(n):

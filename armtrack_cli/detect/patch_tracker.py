@@ -7,8 +7,10 @@ not the image. The window is accepted when its region looks like the patch did
 (detect/patch_check.py: hue histogram, mass, aspect) and has not jumped; the region's
 sub-pixel centroid is reported.
 
-Acquiring (the first frames, and whenever the check fails): the whole frame (its mask guided
-by a half-resolution pass). Every region is followed as a tracklet (frame to frame, to the
+Acquiring (the first frames, and whenever the check fails): the whole frame (its mask from
+the I420 planes in one compiled pass, or guided by a half-resolution pass; its regions, each
+one's CamShift box and look by detect/patch_acquire_kernel.py, or by OpenCV on the reference
+path: ReferenceRegions). Every region is followed as a tracklet (frame to frame, to the
 region nearest where it was heading), each frame marked by whether it looks like the patch. A
 tracklet that looks like the patch now is taken as the patch when it moves (the patch moves
 with the arm: a same-hue cup on the table never does), or when it appears soon after the
