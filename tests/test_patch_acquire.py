@@ -13,22 +13,18 @@ import pytest
 from armtrack_cli.detect.patch_kernel import WindowTracker
 from armtrack_cli.detect.patch_tracker import ReferenceRegions
 from armtrack_cli.detect.regions import Regions
+from tests.test_detect_regions import _blobs
 
 
 def _scene(seed: int, shape=(121, 163)):
-    """An HSV image of random hues and a mask of random ellipses, bars and speckle (8-connected
-    diagonal touches, regions on every edge), at odd and even offsets."""
-    rng = np.random.default_rng(seed)
-    mask = np.zeros(shape, np.uint8)
-    for _ in range(rng.integers(0, 14)):
-        c = (int(rng.integers(-5, shape[1] + 5)), int(rng.integers(-5, shape[0] + 5)))
-        axes = (int(rng.integers(1, 25)), int(rng.integers(1, 18)))
-        cv2.ellipse(mask, c, axes, float(rng.uniform(0, 180)), 0, 360, 255, -1)
+    """An HSV image of random hues and a mask of random ellipses and speckle (test_detect_regions'
+    blobs, regions on every edge) with thin bars and a one-pixel diagonal (8-connected only)."""
+    rng = np.random.default_rng(seed + 1000)
+    mask = _blobs(seed, shape)
     for _ in range(rng.integers(0, 4)):  # thin bars: long, one or two pixels wide
         r, c = int(rng.integers(0, shape[0])), int(rng.integers(0, shape[1] - 30))
         mask[r:r + int(rng.integers(1, 3)), c:c + 30] = 255
-    mask[rng.random(shape) < 0.02] = 255
-    diag = int(rng.integers(0, shape[0] - 12))  # a one-pixel diagonal: 8-connected only
+    diag = int(rng.integers(0, shape[0] - 12))
     mask[np.arange(diag, diag + 10), np.arange(5, 15)] = 255
     hsv = np.dstack([rng.integers(0, 180, shape), rng.integers(0, 256, shape),
                      rng.integers(0, 256, shape)]).astype(np.uint8)
