@@ -6,8 +6,10 @@ with the moving same-hue distractor and clutter (many frames re-acquired on the 
 
 Each named call of detect/patch_tracker.py is wrapped by a timer (about 1 µs a call, counted
 in the totals) and its time charged to the phase it ran in: tracking (the search window) or
-acquiring (the whole frame); `step` is the whole frame, Python included. One table for the
-OpenCV reference path, one for the compiled kernel. Prints markdown; writes nothing.
+acquiring (the whole frame: its mask, its regions, and the tracklets' bookkeeping in
+`_follow` and `_start`, which include the regions' `describe` and `Reference.failure`);
+`step` is the whole frame, Python included. One table for the OpenCV reference path, one for
+the compiled kernels. Prints markdown; writes nothing.
 """
 
 from __future__ import annotations
@@ -67,6 +69,10 @@ def instrument() -> None:
     pk.WindowTracker.track = timed(pk.WindowTracker.track, "kernel: WindowTracker.track")
     pk.WindowTracker.whole_mask = timed(pk.WindowTracker.whole_mask,
                                         "kernel: WindowTracker.whole_mask")
+    pk.regions_of = timed(pk.regions_of, "kernel: regions_of (patch_acquire_kernel)")
+    pk.FrameRegions.describe = timed(pk.FrameRegions.describe, "kernel: FrameRegions.describe")
+    pt.PatchTracker._follow = timed(pt.PatchTracker._follow, "_follow (tracklets, Python)")
+    pt.PatchTracker._start = timed(pt.PatchTracker._start, "_start (tracklets, Python)")
     pt.PatchTracker.step = timed(pt.PatchTracker.step, "step: the whole frame", "all")
     pt.PatchTracker._track = timed(pt.PatchTracker._track, "whole phase", "tracking")
     pt.PatchTracker._acquire = timed(pt.PatchTracker._acquire, "whole phase", "acquiring")

@@ -39,7 +39,10 @@ def detection_lines(res: dict) -> list[str]:
          "|---|---|---|---|---|---|---|"]
     for what, n, sec, dec, goal in res["detect"]:
         ratio = sec / dec
-        ok = _met(n / sec >= 1500 and ratio <= 2.5) if goal else ""
+        if "per CPU s" in goal:  # the detector alone's own goal, "≥ N frames per CPU s"
+            ok = _met(n / sec >= float(goal.split()[1].replace(",", "")))
+        else:
+            ok = _met(n / sec >= 1500 and ratio <= 2.5) if goal else ""
         L.append(f"| {what} | {n} | {sec:.3f} | {n / sec:.0f} | {ratio:.2f} | {goal} | {ok} |")
     return L
 

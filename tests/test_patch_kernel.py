@@ -47,13 +47,15 @@ def test_hue_and_mask_of_every_yuv_equal_opencv(every_yuv, low, high):
     rng = np.array([*low, *high], np.int64)
     pre, row, maybe = prefilter_bounds(rng), np.empty(3 * W, np.uint8), np.empty(W, np.uint8)
     table, cols = pk.chroma_table(rng), np.empty(W // 2 + 2, np.int64)
-    pk.hsv_mask_i420(f.y, f.u, f.v, 0, 0, W, H, rng, table, hue, mask, cols)
+    bounds = pk.chroma_bounds(table)
+    pk.hsv_mask_i420(f.y, f.u, f.v, 0, 0, W, H, rng, table, bounds, hue, mask, cols)
     want = range_mask(hsv, low, high)
     np.testing.assert_array_equal(mask, want)
     np.testing.assert_array_equal(hue[want > 0], hsv[..., 0][want > 0])  # only there needed
     sub = (slice(1001, 1400), slice(2003, 2101))  # a window of odd corners, as tracking cuts
     inside = want[sub] > 0
-    pk.hsv_mask_i420(f.y, f.u, f.v, 2003, 1001, 2101, 1400, rng, table, hue, mask, cols)
+    pk.hsv_mask_i420(f.y, f.u, f.v, 2003, 1001, 2101, 1400, rng, table, bounds, hue, mask,
+                     cols)
     np.testing.assert_array_equal(mask[:399, :98], want[sub])
     np.testing.assert_array_equal(hue[:399, :98][inside], hsv[sub][..., 0][inside])
     bgr = cv2.cvtColor(i420, cv2.COLOR_YUV2BGR_I420)[sub]

@@ -15,7 +15,7 @@ from numba import njit
 TOLERANCE = 10  # cv::CamShift grows meanShift's window by this on every side
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _moments(mask, x, y, w, h):
     """Raw moments m00, m10, m01, m20, m11, m02 of mask[y:y+h, x:x+w] (window coordinates),
     exact integers as doubles (cv::moments on 8-bit)."""
@@ -36,7 +36,7 @@ def _moments(mask, x, y, w, h):
     return float(m00), float(m10), float(m01), float(m20), float(m11), float(m02)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _mean_shift(mask, H, W, x, y, w, h, niters):
     """cv::meanShift with eps 0 (cvRound(0.5²)): the window moved to its mass's centre."""
     for _ in range(niters):
@@ -52,7 +52,7 @@ def _mean_shift(mask, H, W, x, y, w, h, niters):
     return x, y
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def camshift(mask, H, W, x, y, w, h, niters, res):
     """cv::CamShift on mask[:H, :W] from window (x, y, w, h) inside it: res[1:10] = centre,
     size (width, height), angle (deg), window (x, y, w, h); False when the window holds no
@@ -63,6 +63,16 @@ def camshift(mask, H, W, x, y, w, h, niters, res):
     m00, m10, m01, m20, m11, m02 = _moments(mask, x, y, w, h)
     if abs(m00) < 2.220446049250313e-16:
         return False
+    box_of(m00, m10, m01, m20, m11, m02, x, y, w, h, H, W, res)
+    return True
+
+
+@njit(cache=True, nogil=True)
+def box_of(m00, m10, m01, m20, m11, m02, x, y, w, h, H, W, res):
+    """cv::CamShift's last step: its box from the raw moments (m00 > 0) of its final window
+    (x, y, w, h) of an image H x W, into res[1:10] as camshift fills it. On a whole image
+    that is one region's mask (W x H, from the window (0, 0, W, H)) meanShift cannot move the
+    window and the grown window is the image again: CamShift is this step on its moments."""
     inv = 1.0 / m00
     cx, cy = m10 * inv, m01 * inv  # cv::moments' central moments
     mu20, mu11, mu02 = m20 - m10 * cx, m11 - m10 * cy, m02 - m01 * cy
@@ -95,10 +105,9 @@ def camshift(mask, H, W, x, y, w, h, niters, res):
     res[2] = np.float32(y) + np.float32(h) * np.float32(0.5)
     res[3], res[4], res[5] = np.float32(width), np.float32(length), ang
     res[6], res[7], res[8], res[9] = x, y, w, h
-    return True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def region_at(mask, H, W, u, v, seen, stack, counts, hue, res, box):
     """The 8-connected region of mask[:H, :W] under pixel (u, v), as detect/regions.py and
     patch_check.look see it: res[10:14] = area, centroid (u, v) and whether its box touches

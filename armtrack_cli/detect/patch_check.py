@@ -93,16 +93,25 @@ class Reference:
         self.masses: deque[float] = deque(maxlen=HISTORY)
         self.aspects: deque[float] = deque(maxlen=HISTORY)
         self.frames: deque[int] = deque(maxlen=HISTORY)
+        self.hist: np.ndarray | None = None  # hist_sum / n_hist, None before the first frame
+        self._expected: tuple[float, float] | None = None  # _expect()'s, until the next add
 
-    @property
-    def hist(self) -> np.ndarray | None:
-        return self.hist_sum / self.n_hist if self.n_hist else None
+    def _expect(self) -> tuple[float, float]:
+        """The mass the next frame should show (``trend`` over the latest unbroken run) and
+        the median aspect, computed once per accepted frame (the acquiring pass asks for every
+        region)."""
+        if self._expected is None:
+            k = self.run()
+            self._expected = (trend(list(self.masses)[-k:]), median(self.aspects))
+        return self._expected
 
     def add(self, seen: Look, frame: int) -> None:
         """Frame ``frame`` (accepted frames in order) looked like ``seen``."""
         if self.n_hist < self.ref_frames:
             self.hist_sum = seen.hist.copy() if self.n_hist == 0 else self.hist_sum + seen.hist
             self.n_hist += 1
+            self.hist = self.hist_sum / self.n_hist
+        self._expected = None
         self.masses.append(seen.mass)
         self.aspects.append(seen.aspect)
         self.frames.append(frame)
@@ -125,11 +134,10 @@ class Reference:
         if seen.aspect > s.max_aspect:
             return "aspect"
         if self.masses:
-            k = self.run()
-            ref = trend(list(self.masses)[-k:])
+            ref, aspect = self._expect()
             if not s.lost_fraction * ref / slack <= seen.mass <= s.max_growth * ref * slack:
                 return "mass"
-            if seen.aspect > s.max_aspect_change * slack * median(self.aspects):
+            if seen.aspect > s.max_aspect_change * slack * aspect:
                 return "aspect"
         ref_hist = self.hist
         if ref_hist is not None and bhattacharyya(ref_hist, seen.hist) > s.max_hue_distance:

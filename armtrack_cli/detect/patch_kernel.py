@@ -24,12 +24,14 @@ from __future__ import annotations
 
 import functools
 
+import cv2
 import numpy as np
 from numba import njit
 
 from armtrack_cli.detect.camshift_kernel import camshift, region_at
 from armtrack_cli.detect.colour import HUE_BINS
 from armtrack_cli.detect.palm_blob_kernel import HDIV, SDIV, _hsv, _maybe_row, prefilter_bounds
+from armtrack_cli.detect.patch_acquire_kernel import FrameRegions, Labels, regions_of
 from armtrack_cli.detect.patch_check import Look, aspect_of
 from armtrack_cli.detect.yuv_pixel import i420_bgr
 from armtrack_cli.vision.yuv import YuvFrame
@@ -85,23 +87,44 @@ def chroma_table(rng):
     return out
 
 
-@njit(cache=True)
-def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols):
+def chroma_bounds(table: np.ndarray) -> np.ndarray:
+    """(u0, du, v0, dv) int64: every 1 of ``table`` (chroma_table) has u0 ≤ U ≤ u0 + du and
+    v0 ≤ V ≤ v0 + dv (du = dv = -1 when it has none)."""
+    us, vs = np.nonzero(table)
+    if us.size == 0:
+        return np.array([0, -1, 0, -1], np.int64)
+    return np.array([us.min(), us.max() - us.min(), vs.min(), vs.max() - vs.min()], np.int64)
+
+
+@njit(cache=True, nogil=True)
+def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, bounds, hue, mask, cols):
     """hue[:h, :w] and the range mask (255 in range) of the frame's [y0:y1, x0:x1], the hue
     only where the mask is 255: each pixel converted (OpenCV's YUV2BGR_I420, then BGR2HSV)
-    only where its chroma's ``table`` (chroma_table(rng)) entry is 1 (``cols``: scratch of
-    a chroma row's length). Returns the box (c0, r0, c1, r1) of the mask's pixels (c1 = 0
-    when there are none)."""
+    only where its chroma's ``table`` (chroma_table(rng)) entry is 1, looked up only for
+    chroma inside ``bounds`` (chroma_bounds(table): most of a frame is outside, and the
+    test costs less than the table's read) (``cols``: scratch of a chroma row's length).
+    Returns the box (c0, r0, c1, r1) of the mask's pixels (c1 = 0 when there are none)."""
     c0, r0, c1, r1 = x1 - x0, y1 - y0, 0, 0
     for r in range(y1 - y0):
         mask[r, :x1 - x0] = 0
+    # the bounds as uint8: U - u0 wraps below u0, so one unsigned test each (vectorised); with
+    # no bounds (du = -1: 255) every block is looked up in the table
+    u0, du = np.uint8(bounds[0]), np.uint8(bounds[1] & 255)
+    v0, dv = np.uint8(bounds[2]), np.uint8(bounds[3] & 255)
+    ca, cb = x0 >> 1, ((x1 - 1) >> 1) + 1  # the chroma columns
     for cy in range(y0 >> 1, ((y1 - 1) >> 1) + 1):
         urow, vrow = up[cy], vp[cy]
+        some = 0
+        for j in range(cb - ca):  # the 2 x 2 blocks inside the bounds, flagged in cols
+            f = (np.uint8(urow[ca + j] - u0) <= du) & (np.uint8(vrow[ca + j] - v0) <= dv)
+            cols[j] = f
+            some |= f
         n = 0
-        for cx in range(x0 >> 1, ((x1 - 1) >> 1) + 1):  # the 2 x 2 blocks that may hold it
-            if table[urow[cx], vrow[cx]]:
-                cols[n] = cx
-                n += 1
+        if some:
+            for j in range(cb - ca):  # … and kept where the table has them (n <= j: in place)
+                if cols[j] and table[urow[ca + j], vrow[ca + j]]:
+                    cols[n] = ca + j
+                    n += 1
         for y in range(max(2 * cy, y0), min(2 * cy + 2, y1)):
             r = y - y0
             for k in range(n):
@@ -117,7 +140,7 @@ def hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols):
     return c0, r0, c1, r1
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _mask_row(row, n, rng, pre, maybe, hue, mask, r):
     """Hue and range mask (255 in range) of a flat BGR row of n pixels into hue[r], mask[r]:
     palm_blob_kernel._maybe_row's vectorised superset first, the exact test on what it
@@ -133,7 +156,7 @@ def _mask_row(row, n, rng, pre, maybe, hue, mask, r):
         mask[r, c] = 255 if _in_range(h, s, v, rng) else 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def hsv_mask_bgr(bgr, x0, y0, x1, y1, rng, pre, row, maybe, hue, mask):
     """hsv_mask_i420 for a BGR image."""
     for r in range(y1 - y0):
@@ -148,35 +171,52 @@ def hsv_mask_bgr(bgr, x0, y0, x1, y1, rng, pre, row, maybe, hue, mask):
     return c0, r0, c1, r1
 
 
-@njit(cache=True)
-def _min3(src, dst, h, w, erode):
-    """dst = the 3 x 3 minimum (erode) or maximum of src[:h, :w], pixels outside ignored:
-    across each row, then down each column (through dst's own rows, kept in a rolling
-    pair)."""
+@njit(cache=True, nogil=True)
+def _across(src, dst, h, w, erode):
+    """dst[:h, :w] = the minimum (erode) or maximum of each pixel of src and its left and right
+    neighbours (those outside ignored); branch-free inner loops, which LLVM vectorises."""
     for r in range(h):
-        for c in range(w):
-            a = src[r, c]
-            lo = src[r, c - 1] if c > 0 else a
-            hi = src[r, c + 1] if c + 1 < w else a
-            dst[r, c] = min(a, min(lo, hi)) if erode else max(a, max(lo, hi))
-    for c in range(w):
-        prev = dst[0, c]
-        for r in range(h):
-            a = dst[r, c]
-            nxt = dst[r + 1, c] if r + 1 < h else a
-            dst[r, c] = min(prev, min(a, nxt)) if erode else max(prev, max(a, nxt))
-            prev = a
+        a, d = src[r], dst[r]
+        if w == 1:
+            d[0] = a[0]
+            continue
+        if erode:
+            d[0], d[w - 1] = min(a[0], a[1]), min(a[w - 2], a[w - 1])
+            for c in range(1, w - 1):
+                d[c] = min(a[c - 1], min(a[c], a[c + 1]))
+        else:
+            d[0], d[w - 1] = max(a[0], a[1]), max(a[w - 2], a[w - 1])
+            for c in range(1, w - 1):
+                d[c] = max(a[c - 1], max(a[c], a[c + 1]))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
+def _down(src, dst, h, w, erode):
+    """dst[:h, :w] = the minimum (erode) or maximum of each pixel of src and its upper and
+    lower neighbours (those outside ignored), row by row (contiguous, vectorised)."""
+    for r in range(h):
+        up, mid, dn = src[max(r - 1, 0)], src[r], src[min(r + 1, h - 1)]
+        d = dst[r]
+        if erode:
+            for c in range(w):
+                d[c] = min(up[c], min(mid[c], dn[c]))
+        else:
+            for c in range(w):
+                d[c] = max(up[c], max(mid[c], dn[c]))
+
+
+@njit(cache=True, nogil=True)
 def open3(mask, tmp, h, w):
     """mask[:h, :w] opened by a 3 x 3 square in place (erode, then dilate; pixels outside the
-    region are ignored, as cv2.morphologyEx's default border does)."""
-    _min3(mask, tmp, h, w, True)
-    _min3(tmp, mask, h, w, False)
+    region are ignored, as cv2.morphologyEx's default border does): each a pass across the
+    rows and one down the columns (the square is separable), through ``tmp``."""
+    _across(mask, tmp, h, w, True)
+    _down(tmp, mask, h, w, True)
+    _across(mask, tmp, h, w, False)
+    _down(tmp, mask, h, w, False)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def opened_box(mask, tmp, H, W, box):
     """mask[:H, :W] opened (open3) on ``box`` (c0, r0, c1, r1: its pixels' box) grown by 2 px,
     outside which the opening is 0 anyway; returns the opened mask's box (x, y, w, h), as
@@ -196,7 +236,7 @@ def opened_box(mask, tmp, H, W, box):
     return x0, y0, x1 - x0, y1 - y0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def track_tail(hue, mask, tmp, H, W, box, sx, sy, sw, sh, niters, seen, stack, counts, res):
     """After the HSV pass (``box``: its mask's box): the opening, CamShift from window (sx,
     sy, sw, sh), and the region under its centre (res as camshift and region_at fill it;
@@ -220,18 +260,18 @@ def track_tail(hue, mask, tmp, H, W, box, sx, sy, sw, sh, niters, seen, stack, c
 
 
 @functools.lru_cache(maxsize=8)
-def _chroma_table(rng: tuple) -> np.ndarray:
-    """chroma_table, once per colour range in a process (about 0.1 s)."""
+def _chroma_table(rng: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """chroma_table and its chroma_bounds, once per colour range in a process (about 0.1 s)."""
     table = chroma_table(np.array(rng, np.int64))
     table.flags.writeable = False
-    return table
+    return table, chroma_bounds(table)
 
 
-@njit(cache=True)
-def track_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, tmp, cols, start, niters,
-               seen, stack, counts, res):
+@njit(cache=True, nogil=True)
+def track_i420(yp, up, vp, x0, y0, x1, y1, rng, table, bounds, hue, mask, tmp, cols, start,
+               niters, seen, stack, counts, res):
     """hsv_mask_i420 then track_tail, in one call (one dispatch from Python a frame)."""
-    box = hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, hue, mask, cols)
+    box = hsv_mask_i420(yp, up, vp, x0, y0, x1, y1, rng, table, bounds, hue, mask, cols)
     track_tail(hue, mask, tmp, y1 - y0, x1 - x0, box, start[0], start[1], start[2], start[3],
                niters, seen, stack, counts, res)
 
@@ -244,8 +284,9 @@ class WindowTracker:
     def __init__(self, low, high):
         self.rng = np.array([*(int(v) for v in low), *(int(v) for v in high)], np.int64)
         self.pre = prefilter_bounds(self.rng)
-        self.table = _chroma_table(tuple(self.rng))
+        self.table, self.bounds = _chroma_table(tuple(self.rng))
         self.work: Work | None = None
+        self.labels: Labels | None = None
 
     def _work(self, frame) -> Work:
         k = self.work
@@ -258,17 +299,34 @@ class WindowTracker:
         (patch_masks.patch_mask of its HSV; views of work arrays, valid until the next call)
         and the mask's box (x, y, w, h) as cv2.boundingRect gives it."""
         k, (H, W) = self._work(frame), frame.shape[:2]
-        box = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng, self.table, k.hue,
-                            k.mask, k.cols)
+        box = hsv_mask_i420(frame.y, frame.u, frame.v, 0, 0, W, H, self.rng, self.table,
+                            self.bounds, k.hue, k.mask, k.cols)
         return k.hue[:H, :W], k.mask[:H, :W], opened_box(k.mask, k.tmp, H, W, box)
+
+    def whole_regions(self, frame, min_area: int, hsv_mask=None) -> FrameRegions:
+        """The acquiring pass on the whole frame: the regions of its opened mask (whole_mask
+        of a YuvFrame, else ``hsv_mask`` = (HSV image, its opened mask) as given) with the
+        CamShift box and look of each of min_area pixels or more."""
+        H, W = frame.shape[:2]
+        if hsv_mask is None:
+            hue, mask, box = self.whole_mask(frame)
+        else:
+            hue, mask = hsv_mask[0][:, :, 0], hsv_mask[1]
+            box = cv2.boundingRect(mask)
+        lab = self.labels
+        if lab is None or lab.shape[0] < H or lab.shape[1] < W:
+            lab = self.labels = Labels(H, W)
+        found = regions_of(mask, hue, *box, min_area, lab.labels, lab.parent, lab.res)
+        return FrameRegions(found, (H, W))
 
     def track(self, frame, box, start):
         x0, y0, x1, y1 = box
         H, W = y1 - y0, x1 - x0
         k = self._work(frame)
         if isinstance(frame, YuvFrame):
-            track_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng, self.table, k.hue,
-                       k.mask, k.tmp, k.cols, start, NITERS, k.seen, k.stack, k.counts, k.res)
+            track_i420(frame.y, frame.u, frame.v, x0, y0, x1, y1, self.rng, self.table,
+                       self.bounds, k.hue, k.mask, k.tmp, k.cols, start, NITERS, k.seen, k.stack,
+                       k.counts, k.res)
         else:
             box = hsv_mask_bgr(frame, x0, y0, x1, y1, self.rng, self.pre, k.row, k.maybe,
                                k.hue, k.mask)

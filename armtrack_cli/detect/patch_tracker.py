@@ -7,8 +7,10 @@ not the image. The window is accepted when its region looks like the patch did
 (detect/patch_check.py: hue histogram, mass, aspect) and has not jumped; the region's
 sub-pixel centroid is reported.
 
-Acquiring (the first frames, and whenever the check fails): the whole frame (its mask guided
-by a half-resolution pass). Every region is followed as a tracklet (frame to frame, to the
+Acquiring (the first frames, and whenever the check fails): the whole frame (its mask from
+the I420 planes in one compiled pass, or guided by a half-resolution pass; its regions, each
+one's CamShift box and look by detect/patch_acquire_kernel.py, or by OpenCV on the reference
+path: ReferenceRegions). Every region is followed as a tracklet (frame to frame, to the
 region nearest where it was heading), each frame marked by whether it looks like the patch. A
 tracklet that looks like the patch now is taken as the patch when it moves (the patch moves
 with the arm: a same-hue cup on the table never does), or when it appears soon after the
@@ -103,6 +105,20 @@ def region_rect(regions: Regions, k: int):
     x, y, w, h = (int(v) for v in regions.stats[k, :4])
     (cx, cy), size, ang = cv2.CamShift(regions.mask_of(k), (0, 0, w, h), TERM)[0]
     return ((cx + x, cy + y), size, ang), (x, y, w, h)
+
+
+class ReferenceRegions:
+    """The acquiring pass's regions by OpenCV (``regions``: detect/regions.Regions of the
+    whole frame's mask, ``hsv`` its HSV image): n, stats and centroids, and ``describe``."""
+
+    def __init__(self, hsv: np.ndarray, regions: Regions):
+        self.hsv, self.regions = hsv, regions
+        self.n, self.stats, self.centroids = regions.n, regions.stats, regions.centroids
+
+    def describe(self, k: int):
+        """Region k's CamShift box and window (region_rect) and its patch_check.Look."""
+        rect, window = region_rect(self.regions, k)
+        return rect, window, look(self.hsv, self.regions, k, window, rect)
 
 
 def track_reference(frame, box, start, low, high):
@@ -206,41 +222,42 @@ class PatchTracker:
         self.ref.add(seen, i)
 
     # --- acquiring
-    def _whole_mask(self, frame) -> tuple[np.ndarray, np.ndarray, Regions]:
-        """The whole frame's HSV (or its hue alone: only the hue of the mask's pixels is
-        read), patch_masks.patch_mask of it and its regions: by the kernel from I420 planes,
-        else by sparse_patch_mask."""
+    def _whole_regions(self, frame):
+        """The whole frame's regions of the patch's colour (patch_masks.patch_mask of its
+        HSV), each with ``describe``: by the kernels (the mask from I420 planes in one pass,
+        else by sparse_patch_mask; patch_acquire_kernel's regions), else by OpenCV
+        (ReferenceRegions)."""
         if self._kernel and isinstance(frame, YuvFrame):
-            hsv, bp, box = self._kernel.whole_mask(frame)
-            return hsv, bp, Regions(bp, box)
+            return self._kernel.whole_regions(frame, self.s.min_area_px)
         bgr = whole_bgr(frame)
         if self._hsv is None or self._hsv.shape != bgr.shape:
             self._hsv, self._bp = np.empty_like(bgr), np.empty(bgr.shape[:2], np.uint8)
         sparse_patch_mask(bgr, self.low, self.high, self._hsv, self._bp)
-        return self._hsv, self._bp, Regions(self._bp)
+        if self._kernel:
+            return self._kernel.whole_regions(bgr, self.s.min_area_px, (self._hsv, self._bp))
+        return ReferenceRegions(self._hsv, Regions(self._bp))
 
     def _acquire(self, i: int, frame) -> None:
         if self.last[2] >= self._episode:  # the first frame of this acquisition (the patch
             self._episode = i  # was seen since the last one began)
         self._lost_s = (i - self.last[2]) / self.fps if self.last[2] >= 0 else 0.0
-        hsv, bp, regions = self._whole_mask(frame)
-        claimed = self._follow(i, hsv, bp, regions)
-        self._start(i, hsv, bp, regions, claimed)
+        regions = self._whole_regions(frame)
+        claimed = self._follow(i, regions)
+        self._start(i, regions, claimed)
         self.active = [t for t in self.active if t.alive]
         for t in self.active:
             if self._is_patch(t):
                 self._adopt(t)
                 return
 
-    def _candidate(self, hsv, regions, k, rect, window) -> tuple[bool, object]:
-        """Whether window and region k look like the patch (before it has been seen: any
-        compact one)."""
-        seen = look(hsv, regions, k, window, rect)
+    def _candidate(self, seen) -> bool:
+        """Whether a region that looks like ``seen`` looks like the patch (before it has been
+        seen: any compact one)."""
         if self.ref.hist is None:
-            return seen.aspect <= self.s.max_aspect and not seen.cut, seen
-        return not self.ref.failure(seen, self.s, self._lost_s), seen
+            return seen.aspect <= self.s.max_aspect and not seen.cut
+        return not self.ref.failure(seen, self.s, self._lost_s)
 
-    def _follow(self, i: int, hsv, bp, regions) -> dict[int, Tracklet]:
+    def _follow(self, i: int, regions) -> dict[int, Tracklet]:
         """Carry every tracklet one frame on to the region nearest where it is heading (its
         last centroid plus its last step): a tracklet is one connected region, so it is
         never dragged onto a larger same-hue neighbour, as a CamShift window over the whole
@@ -265,21 +282,20 @@ class PatchTracker:
                 claimed[lab].alive = False
                 tr.alive = False
                 continue
-            rect, window = region_rect(regions, lab)
-            ok, seen = self._candidate(hsv, regions, lab, rect, window)
+            rect, window, seen = regions.describe(lab)
+            ok = self._candidate(seen)
             claimed[lab] = tr
             tr.window = window
             tr.add(i, (seen.centroid, *rect[1:]), float(area[lab]), seen, ok)
         return claimed
 
-    def _start(self, i: int, hsv, bp, regions, claimed) -> None:
+    def _start(self, i: int, regions, claimed) -> None:
         """A new tracklet on every unclaimed region."""
         for lab in range(1, regions.n):
             if lab in claimed or regions.stats[lab, cv2.CC_STAT_AREA] < self.s.min_area_px:
                 continue
-            rect, window = region_rect(regions, lab)
-            _, size, ang = rect
-            ok, seen = self._candidate(hsv, regions, lab, rect, window)
+            (_, size, ang), window, seen = regions.describe(lab)
+            ok = self._candidate(seen)
             tr = Tracklet(len(self.tracklets), window)
             tr.add(i, (seen.centroid, size, ang), float(regions.stats[lab, cv2.CC_STAT_AREA]),
                    seen, ok)
