@@ -9,13 +9,14 @@ data after k change. (What it does to the forward filter: docs/validation-forwar
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.fuse import imu_error, models
 from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.methods import Inputs
-from armtrack_cli.fuse.settings import FuseSettings
+from armtrack_cli.fuse.settings import LINEARISATIONS, FuseSettings
 
 from .test_arm_smoother import _batch, _linear_problem
 
@@ -91,17 +92,19 @@ def _session(seed=0):
     return inp, first, arm, proj, np.vstack([np.zeros((1, 3)), np.diff(v, axis=0)])
 
 
-def _estimate(inp, first, arm, proj, passes=2, velocity=False):
+def _estimate(inp, first, arm, proj, passes=2, velocity=False, linearise="passes"):
     x0 = first[0]
     P0 = np.diag([0.03**2] * 3 + [0.05**2] * 3)
-    out = imu_error.causal_errors(inp, first, x0, P0, proj, FuseSettings(), arm, passes)
-    return out if velocity else out[:2]
+    out = imu_error.causal_errors(inp, first, x0, P0, proj,
+                                  FuseSettings(kalman_linearise=linearise), arm, passes)
+    return out[:3] if velocity else out[:2]
 
 
-def test_tilt_and_bias_are_recovered_and_a_w_corrected():
+@pytest.mark.parametrize("linearise", LINEARISATIONS)
+def test_tilt_and_bias_are_recovered_and_a_w_corrected(linearise):
     inp, first, arm, proj, dv_true = _session()
     assert np.isfinite(proj(first[:, :3])).all()
-    th, ba = _estimate(inp, first, arm, proj)
+    th, ba = _estimate(inp, first, arm, proj, linearise=linearise)
     late = inp.t > 2.0
     # the tilt (what leaks gravity, 1°) within 0.3° after 2 s of detections, 0.1° at the end
     err = np.degrees(np.abs(th[:, :2] - TILT[:2]))
@@ -118,11 +121,12 @@ def test_tilt_and_bias_are_recovered_and_a_w_corrected():
     assert after < 0.2 * before, (before, after)  # 0.19 -> 0.023 m/s², the noise 0.02
 
 
-def test_the_estimate_at_frame_k_uses_no_later_data():
+@pytest.mark.parametrize("linearise", LINEARISATIONS)
+def test_the_estimate_at_frame_k_uses_no_later_data(linearise):
     """Detections, the forward estimate and the IMU from one IMU sample after frame k on
     changed (the fold interpolates to the next sample): frames ≤ k unchanged, later ones not."""
     inp, first, arm, proj, _ = _session()
-    th, ba, v = _estimate(inp, first, arm, proj, passes=8, velocity=True)
+    th, ba, v = _estimate(inp, first, arm, proj, passes=8, velocity=True, linearise=linearise)
     k = 100
     z = inp.z.copy()
     z[k + 1:] += 25.0
@@ -136,7 +140,7 @@ def test_the_estimate_at_frame_k_uses_no_later_data():
     w_B[late] += 0.1
     imu2 = ImuSamples(imu.t, imu.q_WB, f_B, w_B)
     inp2 = Inputs(inp.steps, z, inp.q_WB, t=inp.t, imu=imu2)
-    th2, ba2, v2 = _estimate(inp2, f2, arm, proj, passes=8, velocity=True)
+    th2, ba2, v2 = _estimate(inp2, f2, arm, proj, passes=8, velocity=True, linearise=linearise)
     np.testing.assert_array_equal(th2[:k + 1], th[:k + 1])
     np.testing.assert_array_equal(ba2[:k + 1], ba[:k + 1])
     np.testing.assert_array_equal(v2[:k + 1], v[:k + 1])  # after 8 passes too
@@ -163,6 +167,47 @@ def test_passes_bring_a_first_run_off_the_arm_back():
     assert rmse[8] < 0.6 * rmse[1] and rmse[8] < 0.01, rmse
 
 
+def test_iterated_pass_is_the_fixed_point_of_the_passes():
+    """The iterated pass (its own rows, linearised per frame in the kernel) equals one pass of
+    ``forward`` linearised by arm_smoother.linearise about the iterated pass's own states: the
+    fixed point the passes converge to, whatever the first run (here 12 cm off for 2 s).
+    Converged within arm_smoother.STEP_TOL_M (10 µm) on every frame, in a few linearisations."""
+    from armtrack_cli.fuse import arm_smoother, imu_fold
+    from armtrack_cli.fuse.methods import camera_arrays
+
+    inp, first, arm, proj, _ = _session()
+    x0, P0 = first[0], np.diag([0.03**2] * 3 + [0.05**2] * 3)
+    s = FuseSettings(kalman_linearise="iterated")
+    off = first.copy()
+    off[60:120, :3] -= 0.12
+    out = imu_error.causal_errors(inp, off, x0, P0, proj, s, arm)
+    out2 = imu_error.causal_errors(inp, None, x0, P0, proj, s, arm)
+    for a, b in zip(out, out2):  # no first run used
+        np.testing.assert_array_equal(a, b)
+    imu, seen = inp.imu, np.isfinite(inp.z).all(axis=1)
+    fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, inp.t, hold=s.imu_hold)
+    track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, inp.t)
+    F, b, Q = arm_smoother.process(fd, s, None, 0.01, track)
+    m0, Pm0 = arm_smoother.prior(x0, P0, s, None, True)
+    infl = np.r_[np.full(3, s.reacquire_sigma_m**2), np.full(3, s.init_vel_sigma_m_s**2),
+                 np.zeros(m0.size - 6)]
+    X, codes, lin = imu_error.iterated(
+        m0, Pm0, F, b, Q, np.where(seen[:, None], inp.z, 0.0), seen, s.pixel_sigma**2,
+        *camera_arrays(proj), quat.rotate(inp.q_WB, arm.forearm_B), arm.shoulder, arm.L1,
+        arm.L2, s.constraint_sigma_m**2, s.gate_chi2, s.reacquire_frames, infl,
+        arm_smoother.STEP_TOL_M, imu_error.MAX_ITERATIONS)
+    np.testing.assert_allclose(X[:, 3:6], out[2], atol=1e-12)
+    assert lin.max() < imu_error.MAX_ITERATIONS and lin.mean() < 4, (lin.mean(), lin.max())
+    # the reference: the same model linearised about those states by the numpy rows
+    Hc, zc, Hk, zk = arm_smoother.linearise(X, inp.z, inp.q_WB, proj, arm, arm.shoulder)
+    ref, ref_codes = imu_error.forward(m0, Pm0, F, b, Q, Hc, zc, seen, s.pixel_sigma**2, Hk,
+                                       zk, s.constraint_sigma_m**2, s.gate_chi2,
+                                       s.reacquire_frames, infl)
+    np.testing.assert_array_equal(ref_codes, codes)
+    np.testing.assert_allclose(ref[:, :3], X[:, :3], atol=2e-5)  # m
+    np.testing.assert_allclose(ref[:, 3:6], X[:, 3:6], atol=1e-3)  # m/s
+
+
 def test_correction_is_the_fold_of_the_error_terms():
     """A constant δθ, b_a: the corrected step equals the fold of R̂ f̂ + g + [s]× δθ − R̂ b_a
     held over the samples (imu_fold's derivation), to round-off."""
@@ -179,15 +224,17 @@ def test_correction_is_the_fold_of_the_error_terms():
     np.testing.assert_allclose(fixed.dp[2:], ref.dp[2:], atol=1e-12)
 
 
-def test_the_recipe_stays_a_forward_filter():
-    """tao2008-pf-constraint's whole chain (particles, 8 Kalman passes, particles again with
-    the passes' velocity): detections and IMU changed after frame k leave frames ≤ k
-    bit-identical, and the later ones not."""
+@pytest.mark.parametrize("linearise", LINEARISATIONS)
+def test_the_recipe_stays_a_forward_filter(linearise):
+    """tao2008-pf-constraint's whole chain (the iterated Kalman pass and the particles with its
+    velocity; before: particles, 8 Kalman passes, particles again): detections and IMU changed
+    after frame k leave frames ≤ k bit-identical, and the later ones not."""
     from armtrack_cli.fuse import methods
 
     inp, first, arm, proj, _ = _session()
     s = FuseSettings(method="pf-constraint", smoother="none", imu_error="causal",
-                     kalman_passes=8, kalman_velocity=1.0, particles=200)
+                     kalman_linearise=linearise, kalman_passes=8, kalman_velocity=1.0,
+                     particles=200)
     x0, P0 = first[0], np.diag([0.03**2] * 3 + [0.05**2] * 3)
     k = 100
     z = inp.z.copy()

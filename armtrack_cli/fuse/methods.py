@@ -100,7 +100,7 @@ def _reacquire_inflation(s: FuseSettings) -> np.ndarray:
     return np.r_[np.full(3, s.reacquire_sigma_m**2), np.full(3, s.init_vel_sigma_m_s**2)]
 
 
-def _camera_arrays(proj: Projection) -> tuple[np.ndarray, np.ndarray]:
+def camera_arrays(proj: Projection) -> tuple[np.ndarray, np.ndarray]:
     """The projection as the kernels take it: (R row-major, T, fx, fy, cx, cy) and the
     distortion (k1, k2, p1, p2, k3)."""
     cam = np.r_[proj.R.ravel(), np.ravel(proj.T), proj._f, proj._c].astype(float)
@@ -116,7 +116,7 @@ def _run_gaussian_compiled(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Pr
     from armtrack_cli.fuse import gaussian_kernel
 
     st = inp.steps
-    cam, dist = _camera_arrays(proj)
+    cam, dist = camera_arrays(proj)
     mean, cov, codes = gaussian_kernel.run(
         _f64(x0), _f64(P0), _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), float(st.q),
         cam, dist, float(s.pixel_sigma**2), gaussian_kernel.METHODS[method], sp.Wm, sp.Wc,
@@ -245,7 +245,7 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
     st = inp.steps
-    cam, dist = _camera_arrays(proj)
+    cam, dist = camera_arrays(proj)
     walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
     centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
     mean, cov, n_eff, codes = pf_kernel.run(
@@ -304,8 +304,10 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
     elif method in ("pf-constraint", "arm-smoother"):
         if arm is None:
             raise ValueError(f"{method} needs the arm model")
-        est = run_particles(inp, x0, P0, proj, s, arm, constrained=True)
-        if method == "pf-constraint" and s.imu_error == "causal":
+        causal = method == "pf-constraint" and s.imu_error == "causal"
+        est = (None if causal and s.kalman_linearise == "iterated"  # no first run to linearise
+               else run_particles(inp, x0, P0, proj, s, arm, constrained=True))
+        if causal:
             est = run_error_corrected(inp, x0, P0, proj, s, arm, est)
         elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
@@ -335,20 +337,24 @@ def run_bias_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projec
 
 
 def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
-                        s: FuseSettings, arm: Arm, first: Estimates) -> Estimates:
-    """pf-constraint again on a_W corrected by the IMU's orientation error and accelerometer
-    bias as a forward Kalman pass estimates them from the data up to each frame, linearised
-    about the first run's estimates, then its own, its velocity given to them (fuse/imu_error.py)."""
+                        s: FuseSettings, arm: Arm, first: Estimates | None) -> Estimates:
+    """pf-constraint on a_W corrected by the IMU's orientation error and accelerometer bias as
+    a forward Kalman pass estimates them from the data up to each frame, its velocity given to
+    the particles (fuse/imu_error.py); ``first``: the particles' first run, about which the
+    pass is linearised with kalman_linearise = "passes" (None with "iterated")."""
     from armtrack_cli.fuse import imu_error  # numba's: imported only when it runs
 
     if inp.imu is None or inp.t is None:
         raise ValueError("imu_error = 'causal' needs the IMU samples and the frame times")
-    th, ba, v = imu_error.causal_errors(inp, first.mean, x0, P0, proj, s, arm, s.kalman_passes)
+    th, ba, v, lin = imu_error.causal_errors(inp, None if first is None else first.mean, x0, P0,
+                                             proj, s, arm, s.kalman_passes)
     est = run_particles(replace(inp, steps=imu_error.corrected(inp, inp.steps, th, ba),
                                 q_WB=arm_smoother.corrected(inp.q_WB, th)), x0, P0, proj, s, arm,
                         constrained=True, v_ref=v)
     summary = {"orientation_error_rms_deg": round(float(np.degrees(np.sqrt(np.mean(np.sum(
-        th**2, axis=1))))), 3), "accel_bias_m_s2": [round(float(v), 4) for v in ba[-1]]}
+        th**2, axis=1))))), 3), "accel_bias_m_s2": [round(float(v), 4) for v in ba[-1]],
+        "kalman_linearisations_mean": round(float(lin.mean()), 2),
+        "kalman_linearisations_max": int(lin.max())}
     return replace(est, summary=summary)
 
 

@@ -12,6 +12,7 @@ SMOOTHERS = ("rts", "none")
 SHOULDERS = ("fixed", "drifting")
 HOLDS = ("linear", "sample")  # fuse/imu_fold.py
 IMU_ERRORS = ("none", "causal")  # pf-constraint's a_W correction (fuse/imu_error.py)
+LINEARISATIONS = ("passes", "iterated")  # its Kalman pass's (fuse/imu_error.py)
 ORIENTATION_MODELS = ("gyro", "gauss-markov")  # fuse/arm_smoother.py
 CAMERA_POSES = ("fixed", "board")  # fuse/camera_pose.py
 
@@ -50,6 +51,8 @@ class FuseSettings:
     #                               intersections against each other
     kalman_passes: int = 2  # imu_error = "causal": forward Kalman passes, each linearised
     #                         about the one before (the first about the particles' own)
+    kalman_linearise: str = "passes"  # imu_error = "causal": "passes" (above) or "iterated":
+    #                                   one pass, each frame linearised about its own update
     kalman_velocity: float = 0.0  # pf-constraint with imu_error = "causal": after each frame
     #                               the cloud's velocities move this share of the way to the
     #                               causal Kalman pass's velocity (fuse/imu_error.py); 0: off
@@ -123,6 +126,7 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
                           "0 ≤ kalman_velocity ≤ 1, kalman_passes ≥ 1")
     for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS),
                               ("imu_error", s.imu_error, IMU_ERRORS),
+                              ("kalman_linearise", s.kalman_linearise, LINEARISATIONS),
                               ("orientation_model", s.orientation_model, ORIENTATION_MODELS),
                               ("camera_pose", s.camera_pose, CAMERA_POSES)):
         if value not in valid:
