@@ -225,6 +225,6 @@ def test_one_step_equals_filterpy():
 @pytest.mark.parametrize("method", ["inertial", "ekf", "ukf", "pf", "pf-constraint",
                                     "arm-smoother"])
 def test_kernels_load_before_a_timed_run(method):
-    from armtrack_cli.fuse.methods import load_kernels
+    from armtrack_cli.fuse.kernel_setup import load_kernels
 
     load_kernels(method)  # runs on a two-frame problem without error

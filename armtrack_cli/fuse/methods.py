@@ -252,47 +252,16 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
-        resample_below(s.pf_resample_ess), _guard(s, points), *vel)
+        resample_below(s.pf_resample_ess), guard_args(s, points), *vel)
     return Estimates(mean, cov, n_eff, codes)
 
 
-def _guard(s: FuseSettings, points: np.ndarray) -> tuple:
+def guard_args(s: FuseSettings, points: np.ndarray) -> tuple:
     """The kernel's gate and re-seeding arguments (pf_kernel.run)."""
     return (_f64(points), float(s.pixel_sigma**2), float(s.gate_chi2), int(s.reacquire_frames),
             int(np.floor(s.reseed_share * s.particles + 0.5)), float(s.reseed_ess),
             float(s.reseed_sigma_m), float(s.reseed_prior_m),
             np.r_[np.full(3, s.reacquire_sigma_m), np.full(3, s.init_vel_sigma_m_s)])
-
-
-def load_kernels(method: str) -> None:
-    """Load ``method``'s compiled kernel (numba's set-up and its cache, about half a second
-    once per process; a compile, once per install) by running it on a two-frame problem, so
-    that a caller timing ``run`` times the filter only."""
-    if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint", "arm-smoother"):
-        return
-    if method == "arm-smoother":
-        from armtrack_cli.fuse.smoother_kernel import smooth as smoother_pass
-
-        d, n = 12, 2
-        e = np.tile(np.eye(d), (n, 1, 1))
-        smoother_pass(np.zeros(d), np.eye(d), e, np.zeros((n, d)), e, np.zeros((n, 2, d)),
-                      np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
-                      np.ones(n, bool), 1.0, 13.8)
-        method = "pf-constraint"
-    from armtrack_cli.fuse import gaussian_kernel, pf_kernel
-
-    z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
-    cam = np.r_[np.eye(3).ravel(), 0.0, 0.0, 10.0, 1.0, 1.0, 0.0, 0.0]  # 10 m in front
-    dist, x0 = np.zeros(5), np.zeros(6)
-    if method in ("ekf", "ukf", "inertial"):
-        sp = gaussian.SigmaPoints(6)
-        gaussian_kernel.run(x0, 1e-4 * np.eye(6), z, q, d3, d3, 0.0, cam, dist, 1.0,
-                            gaussian_kernel.METHODS[method], sp.Wm, sp.Wc, 1.0, 13.8, 10,
-                            np.zeros(6))
-    else:
-        pf_kernel.run(np.zeros((10, 6)), np.zeros(2, np.uint64), z, q, d3, d3, d3,
-                      d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
-                      1.0, _guard(FuseSettings(particles=10), np.zeros((2, 2, 3))), d3, 0.0)
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,

@@ -18,7 +18,8 @@ from armtrack_cli.core.methods import DEFAULT_FOR_KIND, NEEDS, PALM_METHODS
 from armtrack_cli.fuse import camera_pose, models, robust
 from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.gyro_orientation import gyro_anchored
-from armtrack_cli.fuse.methods import Inputs, load_kernels, run
+from armtrack_cli.fuse.kernel_setup import load_kernels
+from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
