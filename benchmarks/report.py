@@ -152,10 +152,23 @@ def _passes(rows, pfc) -> list[str]:
 
 def end_to_end_lines(res: dict) -> list[str]:
     """Every end-to-end section (one per session length), then growth and memory."""
-    L = []
+    L = _compile(res["compile"]) if "compile" in res else []
     for minutes, rows in res["e2e"].items():
         L += _end_to_end(minutes, rows, res["default"], res.get("run", {}).get(minutes))
     return L + _memory(res)
+
+
+def _compile(row) -> list[str]:
+    """numba's one-time compile (benchmarks/run.warm_numba), which the stages' rows leave out."""
+    name, sec, mb, err, load = row
+    return ["", "## numba's one-time compile", "",
+            "What the first run after an install (or a change to a compiled kernel's source) "
+            "pays once: a fresh process with an empty numba cache (NUMBA_CACHE_DIR) compiling "
+            "every kernel that detect and the default method use. The cache is then made warm "
+            "by a throw-away run on circle-01 with the user's cache, before every row below.",
+            "", "| what | seconds | peak memory (MB) | load |", "|---|---|---|---|",
+            f"| {name} | {sec:.1f} | {mb:.0f} | {load:.1f} |" if not err else
+            f"| {name} | failed: {err} | | {load:.1f} |"]
 
 
 def _end_to_end(minutes: float, rows, method: str, run=None) -> list[str]:
@@ -168,7 +181,9 @@ def _end_to_end(minutes: float, rows, method: str, run=None) -> list[str]:
     L = ["", f"## A {minutes:g}-minute session end to end ({int(minutes * 1800)} frames, "
          f"{int(minutes * 6000)} IMU samples), default method {method}", "",
          "Each stage in a fresh process (`pipeline.STAGE(SESSION)`: its imports included), its "
-         "peak resident memory (VmHWM); the load average (1 min) after each.", "",
+         "peak resident memory (VmHWM); the load average (1 min) after each. numba's cache is "
+         "warm (a throw-away run on circle-01 first, as after an install: the compile's own "
+         "cost is the row above), so these rows measure the stage, not the compiler.", "",
          "| stage | seconds | × decode-only | share | peak memory (MB) | load |",
          "|---|---|---|---|---|---|"]
     for name, sec, mb, err, load in rows:

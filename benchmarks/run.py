@@ -265,9 +265,9 @@ def user_rows(folder, out) -> list[tuple]:
     return rows
 
 
-def stage(code: str) -> tuple[float, float, str]:
-    """Wall seconds and peak memory (MB) of one pipeline call in its own process, and its
-    error's last line if it failed."""
+def stage(code: str, env: dict | None = None) -> tuple[float, float, str]:
+    """Wall seconds and peak memory (MB) of one pipeline call in its own process (the user's
+    environment, or ``env``), and its error's last line if it failed."""
     import subprocess
 
     # VmHWM: this process's peak resident memory (ru_maxrss would carry the parent's peak
@@ -277,13 +277,34 @@ def stage(code: str) -> tuple[float, float, str]:
             "t = time.perf_counter(); " + code + "; print(time.perf_counter() - t, int(re.search("
             "r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read()).group(1)) / 1024)")
     r = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True,
-                       cwd=REPO, env=_ENV)
+                       cwd=REPO, env=_ENV if env is None else env)
     if r.returncode:  # reported in the table, not fatal
         last = (r.stderr.strip().splitlines() or ["?"])[-1]
         print(f"stage failed: {code}\n{r.stderr}", file=sys.stderr)
         return float("nan"), float("nan"), last
     sec, mb = (float(v) for v in r.stdout.split()[-2:])
     return sec, mb, ""
+
+
+def warm_numba(tmp: str) -> tuple:
+    """numba's one-time compile, measured, then its cache made warm, as an install leaves it:
+    `pipeline.run` on circle-01 through fuse (every kernel detect and the default method
+    use) in a throw-away process with an empty NUMBA_CACHE_DIR (it compiles everything: the
+    row's seconds and peak memory), then again with the user's cache (it compiles only what a
+    source change made stale), so that the end-to-end rows measure the stages, not the
+    compiler."""
+    import tempfile
+
+    def code(out: str) -> str:
+        return (f"pipeline.run({str(SAMPLES / 'circle-01')!r}, through='fuse', "
+                f"out={str(Path(tmp) / out)!r})")
+
+    with tempfile.TemporaryDirectory() as cache:
+        row = ("one-time compile: `armtrack run circle-01 --through fuse` with an empty numba "
+               "cache", *stage(code("compile"), {**_ENV, "NUMBA_CACHE_DIR": cache}),
+               os.getloadavg()[0])
+    stage(code("warm"))  # the user's cache, as an install leaves it
+    return row
 
 
 def end_to_end(tmp: str, minutes: float) -> list[tuple]:
@@ -343,6 +364,7 @@ def end_to_end_only() -> None:
 
     res = {"default": DEFAULT_FOR_KIND["arm"], "e2e": {}, "run": {}}
     with tempfile.TemporaryDirectory() as tmp:
+        res["compile"] = warm_numba(tmp)
         for m in minutes:
             res["e2e"][m] = end_to_end(tmp, m)
             res["run"][m] = run_one_process(tmp, m)
@@ -394,6 +416,7 @@ def main() -> None:
         res["scaling"] = scaling_rows(inp, proj, arm, x0, P0, s)
         res["user"] = user_rows(folder, out)
         res["e2e"], res["run"] = {}, {}
+        res["compile"] = warm_numba(tmp)
         for m in minutes:
             res["e2e"][m] = end_to_end(tmp, m)
             res["run"][m] = run_one_process(tmp, m)

@@ -8,8 +8,10 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 from scipy.interpolate import BSpline
 
+from armtrack_cli.fuse import drift_ls
 from armtrack_cli.fuse.drift_ls import (
     Drift,
     SplineRows,
@@ -33,7 +35,12 @@ def _problem(n=400, seed=3):
     return SplineRows.from_csr(B, k + 1), J, v, y, dense, B.shape[1]
 
 
-def test_products_and_gram_equal_the_dense_design():
+CHUNKS = [drift_ls.CHUNK, 37]  # one chunk, and the frames 37 at a time (the products' sums)
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+def test_products_and_gram_equal_the_dense_design(chunk, monkeypatch):
+    monkeypatch.setattr(drift_ls, "CHUNK", chunk)
     rows, J, v, y, dense, m = _problem()
     D = Drift(rows, J)
     perm = np.array([a * m + j for j in range(m) for a in range(3)])  # to column 3j + a
@@ -41,7 +48,7 @@ def test_products_and_gram_equal_the_dense_design():
     assert np.allclose(D.t(y), Dd.T @ y.ravel(), rtol=1e-12, atol=1e-9)
     theta = np.random.default_rng(1).normal(size=3 * m)
     assert np.allclose(D.times(theta).ravel(), Dd @ theta, rtol=1e-12, atol=1e-9)
-    ab, Dy, yy = normal_parts(rows, J, y)
+    ab, Dy, yy = normal_parts(D, y)
     G = Dd.T @ Dd
     U = ab.shape[0] - 1
     for i in range(3 * m):  # the upper band holds G; G is zero beyond it
@@ -52,7 +59,9 @@ def test_products_and_gram_equal_the_dense_design():
     assert yy == np.sum(y * y)
 
 
-def test_fit_with_scale_is_the_least_squares_residual():
+@pytest.mark.parametrize("chunk", CHUNKS)
+def test_fit_with_scale_is_the_least_squares_residual(chunk, monkeypatch):
+    monkeypatch.setattr(drift_ls, "CHUNK", chunk)
     rows, J, v, y, dense, m = _problem()
     X = np.hstack([v.reshape(-1, 1), dense])
     theta, *_ = np.linalg.lstsq(X, y.ravel(), rcond=None)
@@ -63,13 +72,20 @@ def test_fit_with_scale_is_the_least_squares_residual():
     theta, *_ = np.linalg.lstsq(X, y.ravel(), rcond=None)
     r = fit_bordered(Drift(rows, J), E, y)
     assert np.allclose(r.ravel(), y.ravel() - X @ theta, atol=1e-7)
+    used = np.random.default_rng(6).random(v.shape[0]) > 0.3  # on some frames: their rows
+    X = np.hstack([E[used].reshape(-1, 3), dense.reshape(-1, 2, dense.shape[1])[used].reshape(
+        -1, dense.shape[1])])
+    theta, *_ = np.linalg.lstsq(X, y[used].ravel(), rcond=None)
+    r = fit_bordered(Drift(rows, J, used), E[used], y[used])
+    assert np.allclose(r.ravel(), y[used].ravel() - X @ theta, atol=1e-7)
 
 
 def test_frame_sets_add_up():
     """normal_parts over a set of frames is the sum over any split of it (the grid's update)."""
     rows, J, v, y, _, _ = _problem()
     a = np.arange(rows.start.size) % 3 == 0
-    whole, first, second = (normal_parts(rows[m], J[m], y[m]) for m in (slice(None), a, ~a))
+    whole, first, second = (normal_parts(Drift(rows, J, m), y[m])
+                            for m in (np.ones_like(a), a, ~a))
     for w, f, s in zip(whole, first, second):
         assert np.allclose(w, f + s, rtol=1e-12, atol=1e-6)
 

@@ -218,3 +218,33 @@ def test_the_offset_check_loads_no_scipy_signal_interpolate_or_optimize(tmp_path
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     estimate, *loaded = out.stdout.split()
     assert abs(float(estimate) - 0.2) < 0.02 and loaded == []
+
+
+def test_chunked_columns_and_rays_equal_the_whole_sessions(monkeypatch):
+    """The offset check forms its columns, rays and Jacobians CHUNK frames at a time (issue 15:
+    memory bounded however long the session): 50 frames at a time give the rays and
+    Jacobians to the bit, the cost and the SD's fit's residuals to 1e-9 of one chunk's (the
+    sums' order changes: their rounding, ~1e-16, shows at ~4e-11 through the banded normal
+    equations' condition and the cost's yᵀy less sums of its size)."""
+    from armtrack_cli.fuse import drift_ls, imu_sync, sync_rays
+
+    p = case(0.2, task="figure8", seed=1)
+    uv = p.uv.copy()
+    uv[np.random.default_rng(2).random(uv.shape[0]) < 0.1] = np.nan
+    p = replace(p, uv=uv)
+
+    def parts():
+        pre = imu_sync._prepare(p, 0.19)
+        ok = imu_sync._usable(p, pre, 0.21)
+        return (sync_rays.wrist_on_rays(p, 0.19), pre.J,
+                [imu_sync.cost(d, p, pre, 100, {}) for d in (0.17, 0.2, 0.23)],
+                imu_sync._fit(p, pre, 0.21, ok)[0])
+
+    whole = parts()
+    for module in (imu_sync, sync_rays, drift_ls):
+        monkeypatch.setattr(module, "CHUNK", 50)
+    split = parts()
+    assert np.array_equal(whole[0], split[0], equal_nan=True)
+    assert np.array_equal(whole[1], split[1])
+    assert np.allclose(whole[2], split[2], rtol=1e-9, atol=0)
+    assert np.allclose(whole[3], split[3], rtol=0, atol=1e-9 * np.abs(whole[3]).max())

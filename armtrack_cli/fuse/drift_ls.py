@@ -5,7 +5,8 @@ non-zero at any time, seen in the image as J_k d(t_k) (eq. 7's Jacobian J_k, 2 �
 columns D (2 rows per frame, 3 per basis function, column 3j + a for axis a) have 3K
 non-zeros a row, so DᵀD is banded (3K − 1 off the diagonal) and the least squares cost O(n)
 in time and memory, where the dense D (2n × 3m, m ∝ n) cost O(n³) and O(n²): a 60-minute
-session's dense basis alone was 1.6 GB. Products with D and Dᵀ are formed frame by frame.
+session's dense basis alone was 1.6 GB. Products with D and Dᵀ are formed CHUNK frames at a
+time, so their temporaries do not grow with the session.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 RIDGE = 1e-9  # added to the normal equations' diagonal (keeps an unseen basis function at 0)
+CHUNK = 4096  # frames whose products are formed at once: memory bounded however long the session
 
 
 @dataclass(frozen=True)
@@ -44,25 +46,28 @@ def _columns(rows: SplineRows) -> np.ndarray:
             + np.arange(3)[None, None, :])
 
 
-def normal_parts(rows: SplineRows, J: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                                           float]:
+def normal_parts(D: Drift, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     """DᵀD in upper banded form ((3K, 3m): scipy.linalg.cholesky_banded's), Dᵀy and yᵀy over
-    the frames given: each a sum over frames, so the frames' sets can be updated by adding
-    and subtracting (imu_sync.cost's grid moves a few frames at a time)."""
-    K, n_cols = rows.w.shape[1], 3 * rows.m
+    D's frames (y (n_used, 2) at them): each a sum over frames, so the frames' sets can be
+    updated by adding and subtracting (imu_sync.cost's grid moves a few frames at a time)."""
+    K, n_cols = D.rows.w.shape[1], D.n_cols
     U = 3 * K - 1  # bandwidth above the diagonal
-    col = _columns(rows)
-    M = np.einsum("kia,kib->kab", J, J)  # J_kᵀ J_k
-    ab = np.zeros((U + 1) * n_cols)
-    for d in range(K):  # one (d, e, a, b) term at a time: memory of one frame-long column
-        for e in range(d, K):
-            ww = rows.w[:, d] * rows.w[:, e]
-            for a in range(3):
-                for b in range(3) if d < e else range(a, 3):
-                    ab += np.bincount((U + col[:, d, a] - col[:, e, b]) * n_cols + col[:, e, b],
-                                      ww * M[:, a, b], minlength=ab.size)
-    ab = ab.reshape(U + 1, n_cols)
-    return ab, Drift(rows, J).t(y), float(np.sum(y * y))
+    ab = np.zeros((U + 1, n_cols))
+    for rows, J, _ in D.chunks():
+        c0 = 3 * int(rows.start.min())  # the chunk's columns: c0 … c0 + w − 1
+        col = _columns(rows) - c0
+        w = int(col.max()) + 1
+        M = np.einsum("kia,kib->kab", J, J)  # J_kᵀ J_k
+        part = np.zeros((U + 1) * w)
+        for d in range(K):  # one (d, e, a, b) term at a time: memory of one chunk's column
+            for e in range(d, K):
+                ww = rows.w[:, d] * rows.w[:, e]
+                for a in range(3):
+                    for b in range(3) if d < e else range(a, 3):
+                        part += np.bincount((U + col[:, d, a] - col[:, e, b]) * w
+                                            + col[:, e, b], ww * M[:, a, b], minlength=part.size)
+        ab[:, c0:c0 + w] += part.reshape(U + 1, w)
+    return ab, D.t(y), float(np.sum(y * y))
 
 
 def banded_solver(ab: np.ndarray):
@@ -77,37 +82,59 @@ def banded_solver(ab: np.ndarray):
 
 
 class Drift:
-    """D for frames with basis rows ``rows`` and Jacobians ``J`` (n, 2, 3)."""
+    """D for the frames ``used`` (default: all) of basis rows ``rows`` and Jacobians ``J``
+    (n, 2, 3); the products run over CHUNK frames at a time (no per-frame copy)."""
 
-    def __init__(self, rows: SplineRows, J: np.ndarray):
+    def __init__(self, rows: SplineRows, J: np.ndarray, used: np.ndarray | None = None):
         self.rows, self.J = rows, J
-        self._col = _columns(rows)
+        self.used = np.ones(J.shape[0], bool) if used is None else used
         self.n_cols = 3 * rows.m
 
+    def chunks(self):
+        """(rows, J, s) of each chunk's used frames, s their places among the used ones."""
+        at = 0
+        for a in range(0, self.used.size, CHUNK):
+            sel = np.flatnonzero(self.used[a:a + CHUNK]) + a
+            if sel.size:
+                yield self.rows[sel], self.J[sel], slice(at, at + sel.size)
+                at += sel.size
+
     @property
-    def used(self) -> int:
+    def n_params(self) -> int:
         """The columns these frames touch."""
-        return int(np.unique(self._col[self.rows.w != 0]).size)
+        touched = np.zeros(self.n_cols, bool)
+        for rows, _, _ in self.chunks():
+            touched[_columns(rows)[rows.w != 0]] = True
+        return int(touched.sum())
 
     def t(self, r: np.ndarray) -> np.ndarray:
-        """Dᵀ r for r (n, 2): (3m,)."""
-        g = np.einsum("kia,ki->ka", self.J, r)  # J_kᵀ r_k
-        vals = self.rows.w[:, :, None] * g[:, None, :]
-        return np.bincount(self._col.ravel(), vals.ravel(), minlength=self.n_cols)
+        """Dᵀ r for r (n_used, 2) or (n_used, 2, c): (3m,) or (3m, c)."""
+        r3 = r[:, :, None] if r.ndim == 2 else r
+        out = np.zeros((r3.shape[2], self.n_cols))
+        for rows, J, s in self.chunks():
+            col = _columns(rows).ravel()
+            g = np.einsum("kia,kic->cka", J, r3[s])  # J_kᵀ r_k per column c
+            for c in range(r3.shape[2]):
+                vals = rows.w[:, :, None] * g[c][:, None, :]
+                out[c] += np.bincount(col, vals.ravel(), minlength=self.n_cols)
+        return out[0] if r.ndim == 2 else out.T
 
     def times(self, theta: np.ndarray) -> np.ndarray:
-        """D θ: (n, 2)."""
-        d = np.einsum("kd,kda->ka", self.rows.w, theta[self._col])  # d(t_k), (n, 3)
-        return np.einsum("kia,ka->ki", self.J, d)
+        """D θ: (n_used, 2)."""
+        out = np.empty((int(self.used.sum()), 2))
+        for rows, J, s in self.chunks():
+            d = np.einsum("kd,kda->ka", rows.w, theta[_columns(rows)])  # d(t_k), (k, 3)
+            out[s] = np.einsum("kia,ka->ki", J, d)
+        return out
 
 
 def fit_bordered(D: Drift, E: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Residuals (n, 2) of the least squares y ≈ E γ + D θ, E (n, 2, c) a few dense columns
     (the IMU's scale; a bias's), RIDGE on every parameter's diagonal: the drift eliminated by
     its banded factor, then the c × c system of the dense columns (its Schur complement)."""
-    ab, Dy, _ = normal_parts(D.rows, D.J, y)
+    ab, Dy, _ = normal_parts(D, y)
     solve = banded_solver(ab)
-    DE = np.stack([D.t(E[:, :, i]) for i in range(E.shape[2])], axis=1)  # (3m, c)
+    DE = D.t(E)  # (3m, c)
     Gy, GE = solve(Dy), solve(DE)
     Ef = E.reshape(-1, E.shape[2])
     S = Ef.T @ Ef + RIDGE * np.eye(E.shape[2]) - DE.T @ GE

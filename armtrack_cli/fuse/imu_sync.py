@@ -23,7 +23,12 @@ the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on f
 SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
 (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
 The drift's columns have K = DRIFT_DEGREE + 1 non-zeros per frame and axis, so the fits are
-banded least squares (fuse/drift_ls.py), linear in the session's length in time and memory.
+banded least squares (fuse/drift_ls.py), linear in the session's length in time. Memory: the
+columns at δ, the rays, their Jacobians and every product are formed CHUNK frames at a time
+(the sums WᵀW, Wᵀy, DᵀW, DᵀD carried across chunks); what is kept whole is ∫a dt and ∫R dt at
+the IMU's samples (96 bytes a sample) and the Jacobians, image velocities and drift rows at the
+frames (about 110 bytes a frame): 45 MB at 60 minutes, where the whole-session temporaries
+peaked near 160 MB (issue 15).
 
 Missing detections are missing: lost runs up to BRIDGE_S are bridged for the derivative
 only, a window holding a longer loss gives no image velocity; an IMU gap longer than GAP_S
@@ -41,6 +46,7 @@ from armtrack_cli.core.curves import bspline_rows, hermite, savgol_coeffs
 from armtrack_cli.core.grid_search import coarse_to_fine
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
+    CHUNK,
     RIDGE,
     Drift,
     SplineRows,
@@ -49,6 +55,7 @@ from armtrack_cli.fuse.drift_ls import (
     normal_parts,
 )
 from armtrack_cli.fuse.imu_fold import rotation_integral
+from armtrack_cli.fuse.sync_rays import ray_jacobians, wrist_on_rays  # noqa: F401 (tests')
 
 WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
 KNOT_S = 6.0  # s between the drift spline's knots: the gyro-anchored orientation's leak is
@@ -60,8 +67,6 @@ MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be
 MIN_FRAMES = 30
 COARSE = 3  # the grid is scored every COARSE frame periods, then finely about the best
 REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
-GRAZE_M = 0.15  # m: intersections closer than this along the ray are a grazing ray's (with 0.5 px
-#                of noise a grazing ray's two part by 10 cm from one frame to the next)
 REPREPARE = 3  # at most this many refinements, each with the depths and bias columns at its δ
 
 
@@ -116,7 +121,7 @@ class _Prepared:
 def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Prepared:
     """The fit's parts at δ; given ``like`` (another δ's), only the Jacobians (the rays'
     depths move with δ), the rest shared with it: one copy of the per-sample arrays."""
-    J = _jacobians(p.proj, _fill(wrist_on_rays(p, delta)))
+    J = ray_jacobians(p, delta)
     if like is not None:
         return replace(like, J=J)
     dt = float(np.median(np.diff(p.t_frames)))
@@ -129,59 +134,17 @@ def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Pr
                      v_imu, dt, window)
 
 
-def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
-    """(n, 2, 3) px/s per m/s²: the image velocity J_k ∫R_WB β dt per unit accelerometer bias
-    β in B at t_k − δ (eq. 4: a bias in B turns with the forearm, so its velocity error is not
-    a smooth drift), smoothed as the image side is."""
-    t = np.clip(p.t_frames - delta, p.t_imu[0], p.t_imu[-1])
-    at = np.stack([np.interp(t, p.t_imu, pre.rint[:, i, j]) for i in range(3)
+def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice) -> np.ndarray:
+    """(k, 2, 3) px/s per m/s² at the frames ``sl``: the image velocity J_k ∫R_WB β dt per unit
+    accelerometer bias β in B at t_k − δ (eq. 4: a bias in B turns with the forearm, so its
+    velocity error is not a smooth drift), smoothed as the image side is."""
+    t = np.clip(p.t_frames[sl] - delta, p.t_imu[0], p.t_imu[-1])
+    lo, hi = np.searchsorted(p.t_imu, [t[0], t[-1]])  # the samples these frames fall between
+    s = slice(max(lo - 1, 0), hi + 1)
+    at = np.stack([np.interp(t, p.t_imu[s], pre.rint[s, i, j]) for i in range(3)
                    for j in range(3)], -1).reshape(-1, 3, 3)
-    cols = np.einsum("kij,kja->kia", pre.J, at)
+    cols = np.einsum("kij,kja->kia", pre.J[sl], at)
     return _savgol(cols.reshape(-1, 6), pre.window, 0, pre.dt).reshape(-1, 2, 3)
-
-
-def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
-    """(n, 3) m: each detection's ray where it meets the arm's sphere |p − (S + L2 R u)| = L1
-    (eq. 15; the IMU's orientation at t − δ), the intersection nearer the previous frame's
-    (the first: models.initial_wrist's), where the two are within GRAZE_M of each other the
-    one nearer the table as models.initial_wrist takes it (a grazing ray's choice by nearness
-    bounced onto the other sheet for seconds from a sub-frame change of δ), the ray's nearest
-    point where it misses; without an
-    arm, at the range of the first detection's start. NaN without a detection."""
-    from armtrack_cli.core import quaternion as quat
-
-    det = np.flatnonzero(np.isfinite(p.uv).all(axis=1))
-    q = quat.interpolate(p.t_imu + delta, p.q_WB, p.t_frames[det])
-    q[~np.isfinite(q).all(axis=1)] = p.q_WB[0]
-    x0, _ = models.initial_wrist(p.proj, p.uv[det[0]], arm=p.arm, q_WB=q[0],
-                                 plane_height_m=0.07)
-    c = p.proj.eye
-    d = p.proj.rays(p.uv[det])
-    out = np.full((p.uv.shape[0], 3), np.nan)
-    if p.arm is None:
-        out[det] = c + np.linalg.norm(x0 - c) * d
-        return out
-    near, far, _ = models.ray_sphere(c, d, p.arm.sphere_centres(q), p.arm.L1)
-    lower = np.where(near * d[:, 2] <= far * d[:, 2], near, far)  # nearer the table
-    prev = np.linalg.norm(x0 - c)
-    for i in range(det.size):
-        if far[i] - near[i] < GRAZE_M:  # a grazing ray: which one is ambiguous; the table's
-            s = lower[i]
-        else:
-            s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]
-        out[det[i]] = c + s * d[i]
-        prev = s
-    return out
-
-
-def _jacobians(proj: models.Projection, pts: np.ndarray, h: float = 1e-5) -> np.ndarray:
-    """∂π/∂p (n, 2, 3) px/m at each point (eq. 7), by central differences."""
-    J = np.empty((pts.shape[0], 2, 3))
-    for a in range(3):
-        e = np.zeros(3)
-        e[a] = h
-        J[:, :, a] = (proj(pts + e) - proj(pts - e)) / (2 * h)
-    return J
 
 
 def _bridge(x: np.ndarray, most: int) -> np.ndarray:
@@ -214,49 +177,48 @@ def _spline_basis(t: np.ndarray) -> SplineRows:
     return SplineRows(start, w, knots.size - k - 1)
 
 
-def _fill(x: np.ndarray) -> np.ndarray:
-    """Rows of NaN filled from the nearest row that has values (for the Jacobian only)."""
-    idx = np.flatnonzero(np.isfinite(x).all(axis=1))
-    near = idx[np.clip(np.searchsorted(idx, np.arange(x.shape[0])), 0, idx.size - 1)]
-    return x[near]
-
-
-def predicted(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
-    """V(δ) (n, 2) px/s: the IMU's integrated velocity at t_k − δ (smooth in δ; NaN outside
-    the recording or across a gap longer than GAP_S) projected by J_k (eq. 7's Jacobian:
-    u̇ = J v exactly), smoothed as the image side is."""
-    t = p.t_frames - delta
+def predicted(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None)
+              ) -> np.ndarray:
+    """V(δ) (k, 2) px/s at the frames ``sl``: the IMU's integrated velocity at t_k − δ (smooth
+    in δ; NaN outside the recording or across a gap longer than GAP_S) projected by J_k (eq.
+    7's Jacobian: u̇ = J v exactly), smoothed as the image side is."""
+    t = p.t_frames[sl] - delta
     j = np.clip(np.searchsorted(p.t_imu, t, side="right"), 1, p.t_imu.size - 1)
     t0, t1 = p.t_imu[j - 1], p.t_imu[j]
     v = hermite(p.t_imu, pre.v_imu, p.a_W, t)
     v[(t < p.t_imu[0]) | (t > p.t_imu[-1]) | (t1 - t0 > GAP_S)] = np.nan
-    return _savgol(np.einsum("kij,kj->ki", pre.J, v), pre.window, 0, pre.dt)
+    return _savgol(np.einsum("kij,kj->ki", pre.J[sl], v), pre.window, 0, pre.dt)
 
 
-def _design(pre: _Prepared, ok: np.ndarray) -> tuple[Drift, np.ndarray]:
-    """The drift's columns D (2·n_ok, 3·m) = J_k B_m(t_k) per axis (banded: fuse/drift_ls.py),
-    and y = u̇ (n_ok, 2)."""
-    return Drift(pre.drift[ok], pre.J[ok]), pre.vel_img[ok]
+def _chunks(p: SyncProblem, pre: _Prepared, delta: float):
+    """(a, b, W, usable) for CHUNK frames a … b − 1 at a time: W (b − a, 2, 4) the IMU's
+    columns at δ, V(δ) and the bias's three, and the frames scorable. Each chunk is formed with
+    the smoothing's half window either side, so its values are the whole session's: memory
+    bounded however long the session (issue 15)."""
+    n, h = p.t_frames.size, pre.window // 2
+    for a in range(0, n, CHUNK):
+        b = min(a + CHUNK, n)
+        sl = slice(max(a - h, 0), min(b + h, n))
+        W = np.concatenate([predicted(p, pre, delta, sl)[:, :, None],
+                            _bias_columns(p, pre, delta, sl)], axis=2)[a - sl.start:b - sl.start]
+        yield a, b, W, np.isfinite(W).all(axis=(1, 2)) & np.isfinite(pre.vel_img[a:b]).all(axis=1)
 
 
-def _mask(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[np.ndarray, np.ndarray]:
-    """W (n, 2, 4): the IMU's columns at δ, V(δ) and the bias's three; the frames scorable."""
-    V = predicted(p, pre, delta)
-    W = np.concatenate([V[:, :, None], _bias_columns(p, pre, delta)], axis=2)
-    return W, np.isfinite(W).all(axis=(1, 2)) & np.isfinite(pre.vel_img).all(axis=1)
+def _usable(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
+    """(n,) bool: the frames scorable at δ."""
+    ok = np.zeros(p.t_frames.size, bool)
+    for a, b, _, usable in _chunks(p, pre, delta):
+        ok[a:b] = usable
+    return ok
 
 
-def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray | None = None):
-    """Least squares u̇_k = c V_k(δ) + J_k (∫R dt) β + J_k d(t_k), d the integrated IMU's drift
-    (a smooth 3-D function of time in the spline basis): residuals (n_ok, 2), parameter
-    count, frames used (``ok``: these frames, when given and all scorable)."""
-    V, usable = _mask(p, pre, delta)
-    if ok is None:
-        ok = usable
-    elif not usable[ok].all():
-        return None, 0, ok
-    D, y = _design(pre, ok)
-    return fit_bordered(D, V[ok], y), V.shape[2] + D.used, ok
+def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray):
+    """Least squares u̇_k = c V_k(δ) + J_k (∫R dt) β + J_k d(t_k) over the frames ``ok`` (all
+    scorable), d the integrated IMU's drift (a smooth 3-D function of time in the spline
+    basis): residuals (n_ok, 2) and the parameter count."""
+    E = np.concatenate([W[ok[a:b]] for a, b, W, _ in _chunks(p, pre, delta)])
+    D = Drift(pre.drift, pre.J, ok)
+    return fit_bordered(D, E, pre.vel_img[ok]), E.shape[2] + D.n_params
 
 
 def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
@@ -267,26 +229,28 @@ def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
     S = WᵀW − (DᵀW)ᵀG⁻¹DᵀW and b = Wᵀy − (DᵀW)ᵀG⁻¹Dᵀy, W the four columns that move with δ
     (the scale's and the bias's) eliminated last; a negative scale (c > 0: a range) leaves
     the bias's three alone."""
-    V, ok = _mask(p, pre, delta)
-    if frames is not None:  # the same frames at every δ (a refinement's), when all usable
-        if not ok[frames].all():
-            return np.inf
-        ok = frames
+    ok = np.zeros(p.t_frames.size, bool)
+    WW, Wy, DW = np.zeros((4, 4)), np.zeros(4), np.zeros((3 * pre.drift.m, 4))
+    for a, b, W, use in _chunks(p, pre, delta):  # WᵀW, Wᵀy and DᵀW a chunk at a time
+        if frames is not None:  # the same frames at every δ (a refinement's), when all usable
+            if not use[frames[a:b]].all():
+                return np.inf
+            use = frames[a:b]
+        ok[a:b] = use
+        Wf, y = W[use].reshape(-1, 4), pre.vel_img[a:b][use].ravel()
+        WW += Wf.T @ Wf
+        Wy += Wf.T @ y
+        DW += Drift(pre.drift[a:b], pre.J[a:b], use).t(W[use])
     n = int(ok.sum())
     if n < max(MIN_OVERLAP * n_img, MIN_FRAMES):
         return np.inf
     if cache.get("ok") is None or not np.array_equal(cache["ok"], ok):
-        D, y = _design(pre, ok)
         G, Dy, yy = _normal_update(pre, cache, ok)
         solve = banded_solver(G)
         Gy = solve(Dy)
-        cache.update(ok=ok, D=D, G=G, Dy=Dy, yy=yy, solve=solve, y=y, Gy=Gy,
-                     base=yy - Dy @ Gy)
-    W = V[ok]  # (n_ok, 2, 4)
-    DW = np.stack([cache["D"].t(W[:, :, i]) for i in range(W.shape[2])], axis=1)
-    Wf = W.reshape(-1, W.shape[2])
-    S = Wf.T @ Wf - DW.T @ cache["solve"](DW) + RIDGE * np.eye(W.shape[2])
-    b = Wf.T @ cache["y"].ravel() - DW.T @ cache["Gy"]
+        cache.update(ok=ok, G=G, Dy=Dy, yy=yy, solve=solve, Gy=Gy, base=yy - Dy @ Gy)
+    S = WW - DW.T @ cache["solve"](DW) + RIDGE * np.eye(4)
+    b = Wy - DW.T @ cache["Gy"]
     theta = np.linalg.solve(S, b)
     if theta[0] <= 0:  # c > 0: a range
         return (cache["base"] - float(b[1:] @ np.linalg.solve(S[1:, 1:], b[1:]))) / n
@@ -298,7 +262,7 @@ def _normal_update(pre: _Prepared, cache: dict, ok: np.ndarray):
     added less those dropped, when few changed (the grid's next δ moves the overlap's ends by
     a frame or two), else summed afresh."""
     def parts(m):
-        return normal_parts(pre.drift[m], pre.J[m], pre.vel_img[m])
+        return normal_parts(Drift(pre.drift, pre.J, m), pre.vel_img[m])
 
     old = cache.get("ok")
     if old is not None:
@@ -355,7 +319,7 @@ def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
     """The cost's minimum within d0 ± REFINE_FRAMES periods, on the frames all of it scores:
     (δ, cost)."""
     lo, hi = d0 - REFINE_FRAMES * step, d0 + REFINE_FRAMES * step
-    frames = _mask(p, pre, lo)[1] & _mask(p, pre, d0)[1] & _mask(p, pre, hi)[1]
+    frames = _usable(p, pre, lo) & _usable(p, pre, d0) & _usable(p, pre, hi)
     cache: dict = {}
     c0 = cost(d0, p, pre, n_img, cache, frames)
     x, fun = bounded_min(lambda d: cost(d, p, pre, n_img, cache, frames), lo, hi,
@@ -368,8 +332,8 @@ def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
     over the scale and the drift): SD² = 2 σ² / S'', σ² = S / (2n − parameters), inflated by
     (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ; and the frames used."""
     h = 0.5 * pre.dt
-    ok = _mask(p, pre, delta)[1] & _mask(p, pre, delta + h)[1] & _mask(p, pre, delta - h)[1]
-    fits = [_fit(p, pre, d, ok)[:2] for d in (delta - h, delta, delta + h)]  # three fits
+    ok = _usable(p, pre, delta) & _usable(p, pre, delta + h) & _usable(p, pre, delta - h)
+    fits = [_fit(p, pre, d, ok) for d in (delta - h, delta, delta + h)]  # three fits
     rss = [float(np.sum(r**2)) for r, _ in fits]
     curv = (rss[0] - 2 * rss[1] + rss[2]) / h**2
     r, n_par = fits[1]
