@@ -79,6 +79,12 @@ class Smoothed:
 DRIFT = 4  # the drifting arm's states, the state's last: ℓ (m), then S (3, m in W)
 
 
+def state_size(gyro: bool, camera: bool, drifting: bool) -> int:
+    """d: (p, v, δθ, b_a) 12, + b_g 3 with a gyroscope, + c 6 with the camera pose's
+    correction, + (ℓ, S) 4 with the drifting arm."""
+    return 12 + 3 * gyro + camera_pose.POSE * camera + DRIFT * drifting
+
+
 def camera_slice(d: int, drifting: bool) -> slice:
     """The camera pose's correction c (camera_pose.POSE states) in a state of size d: just
     before the drifting arm's (ℓ, S) where there is one, else the last."""
@@ -126,7 +132,7 @@ def process(fd: imu_fold.Folded, s: FuseSettings, shoulder: np.ndarray | None,
     with ``track`` (the gyro's) δθ follows it and the state holds the gyro bias b_g; with
     ``camera`` the pose's correction c, static (F = I, Q = 0)."""
     n = fd.dt.size
-    d = 12 + 3 * (track is not None) + camera_pose.POSE * camera + DRIFT * (shoulder is not None)
+    d = state_size(track is not None, camera, shoulder is not None)
     dt = fd.dt[:, None, None]
     eye = np.eye(3)
     F = np.tile(np.eye(d), (n, 1, 1))
@@ -211,8 +217,7 @@ def prior(x0: np.ndarray, P0: np.ndarray, s: FuseSettings,
     (``pose_cov``, when given), (ℓ, S) about the declared arm (``drift_prior``), and then
     the first wrist, which the pipeline placed on the declared sphere, as uncertain as that
     sphere."""
-    d = (12 + 3 * gyro + camera_pose.POSE * (pose_cov is not None)
-         + DRIFT * (shoulder is not None))
+    d = state_size(gyro, pose_cov is not None, shoulder is not None)
     m, P = np.zeros(d), np.zeros((d, d))
     m[:6], P[:6, :6] = x0, P0
     P[TH, TH] = orientation_var(s)
