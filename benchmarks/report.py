@@ -74,6 +74,10 @@ def write_report(res: dict, path: Path) -> str:
     for recipe, n, sec, fps, cpu_s, setup in res["user"]:
         L.append(f"| {recipe} | {n} | {sec:.3f} | {fps:.0f} | {cpu_s:.3f} | "
                  f"{n / max(cpu_s, 1e-9):.0f} | {setup:.2f} |")
+    if "startup" in res:
+        from startup import startup_lines
+
+        L += [""] + startup_lines(res["startup"])
     L += ["", "## Gaussian filters against FilterPy 2.0 (same model, same maths)", "",
           "| filter | steps | armtrack µs/step | numpy reference µs/step | FilterPy µs/step | "
           "× FilterPy | goal | | one step from the same prior, max diff (m) | whole session, "

@@ -397,10 +397,11 @@ def main() -> None:
 
     from filters import gaussian_vs_filterpy, pf_vs_reference, resampling_vs_filterpy, smoother_rows
     from pf_profile import passes
+    from startup import startup_rows
 
     minutes = [float(m) for m in os.environ.get("BENCH_MINUTES", "1,10,60").split(",")]
     load0 = os.getloadavg()[1]
-    res = {}
+    res = {"startup": startup_rows()}
     with tempfile.TemporaryDirectory() as tmp:
         load_det = os.getloadavg()[0]
         res["detect"] = detection_rows(tmp)

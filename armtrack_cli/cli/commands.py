@@ -19,7 +19,7 @@ from armtrack_cli.cli.params import Finite, parse_hide, parse_pixels
 from armtrack_cli.core.errors import ArmtrackError, DescribedError
 from armtrack_cli.core.limits import MAX_PARTICLES
 from armtrack_cli.core.methods import BUILT, METHODS
-from armtrack_cli.simulate.hand import HAND_TASKS
+from armtrack_cli.simulate.tasks import ARM_TASKS, HAND_TASKS
 
 # Heavy libraries (OpenCV, SciPy, pandas, matplotlib) are imported by the pipeline, which each
 # command imports when it runs: `armtrack --help` and a shell script's calls start at once.
@@ -279,8 +279,7 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 
 @main.command()
 @click.argument("out", type=click.Path(file_okay=False))
-@click.option("--task", type=click.Choice(["circle", "rectangle", "reach", "figure8",
-                                           *HAND_TASKS]),
+@click.option("--task", type=click.Choice([*ARM_TASKS, *HAND_TASKS]),
               default="circle", show_default=True,
               help="Task: the first four are arm sessions (IMU + patch), the others "
               "palm-marker sessions with depth (wrist-deviation: ±25° radial/ulnar deviation, "

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from armtrack_cli.core.errors import DataError
@@ -13,6 +12,8 @@ IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 
 
 def read_images(folder: str | Path) -> list[tuple[Path, np.ndarray]]:
+    import cv2  # here, not at the top: `armtrack info` lists images without OpenCV
+
     folder = Path(folder)
     paths = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_EXT)
     if not paths:
@@ -28,6 +29,8 @@ def read_images(folder: str | Path) -> list[tuple[Path, np.ndarray]]:
 
 
 def write_image(path: str | Path, image: np.ndarray) -> Path:
+    import cv2
+
     from armtrack_cli.session.outputs import atomic_write
 
     def write(tmp: Path) -> None:

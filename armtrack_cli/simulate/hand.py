@@ -15,11 +15,11 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.simulate.kinematics import min_jerk
+from armtrack_cli.simulate.tasks import HAND_TASKS
 
 MARKERS = ("WRIST", "MCP2", "MCP3", "MCP4", "MCP5", "CMC1")
 LINKS_M = (0.0, 0.085, 0.080, 0.075, 0.070, 0.045)
 ANGLES_DEG = (0.0, 14.0, 0.0, -13.0, -26.0, 52.0)  # in-plane angle from x_H (towards MCP3)
-HAND_TASKS = ("wrist-rom", "reach-grasp", "wrist-deviation", "wrist-flexion")
 NEUTRAL_S = 1.5
 
 

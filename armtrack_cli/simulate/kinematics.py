@@ -13,8 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
+from armtrack_cli.simulate.tasks import ARM_TASKS
 
-TASKS = ("circle", "rectangle", "reach", "figure8")
+TASKS = ARM_TASKS
 REST_S = 1.5  # still at the start and end of every task (lets filters start from rest)
 
 
