@@ -105,3 +105,38 @@ def test_rest_speed_is_the_median_of_each_trials_still_velocity(tmp_path):
         np.savez(path, wrist_vel=np.vstack([still, moving]))
         paths.append(path)
     assert np.isclose(mocap_rates.rest_speed(paths), 0.004, rtol=1e-12)
+
+
+def test_the_board_pose_error_against_a_known_correction(tmp_path):
+    """A pose moved off the truth by a known c = (φ, τ): its angle, distance and Mahalanobis²
+    under a diagonal covariance, by hand."""
+    tr = _truth(tmp_path / "s.truth.npz")
+    phi, tau = np.array([0.01, -0.02, 0.005]), np.array([0.003, 0.0, -0.004])
+    rot = quat.to_matrix(quat.from_axis_angle(phi[None] / np.linalg.norm(phi),
+                                              np.array([np.linalg.norm(phi)])))[0]
+    # the truth is exp([φ]×) applied to the estimate: R_true = rot R, T_true = rot T + τ
+    R = rot.T @ tr["R_WC"]
+    T = rot.T @ (tr["T_WC"] - tau)
+    sd = np.array([0.01, 0.01, 0.01, 0.002, 0.002, 0.002])
+    deg, cm, m2 = mocap_budget.pose_error(R, T, np.diag(sd**2), tmp_path / "s.truth.npz")
+    assert np.isclose(deg, np.degrees(np.linalg.norm(phi)))
+    assert np.isclose(cm, np.linalg.norm(tau) * 100)
+    assert np.isclose(m2, np.sum((np.r_[phi, tau] / sd) ** 2))
+
+
+def test_the_pixel_sd_pools_the_other_sessions_errors(tmp_path):
+    """Two sessions whose detections lie a known offset from the true pixel (one frame not
+    ok, its pixel far off): the RMS per axis over the ok frames."""
+    offsets = {"a": (0.3, -0.1), "b": (0.0, 0.2)}
+    for name, (du, dv) in offsets.items():
+        px = np.c_[np.linspace(100, 200, 10), np.linspace(50, 80, 10)]
+        np.savez(tmp_path / f"{name}.truth.npz", frame_t=np.arange(10) / 30.0, frame_wrist_px=px)
+        (tmp_path / name / "armtrack").mkdir(parents=True)
+        ok = np.ones(10, int)
+        ok[3] = 0
+        rows = [f"{k},{px[k, 0] + du + 50 * (1 - ok[k]):.6f},{px[k, 1] + dv:.6f},{ok[k]}"
+                for k in range(10)]
+        (tmp_path / name / "armtrack" / "detections.csv").write_text(
+            "frame,u,v,ok\n" + "\n".join(rows) + "\n")
+    got = mocap_rates.pixel_sd([tmp_path / "a.truth.npz", tmp_path / "b.truth.npz"])
+    assert np.isclose(got, np.sqrt((0.3**2 + 0.1**2 + 0.0**2 + 0.2**2) / 4), atol=1e-6)

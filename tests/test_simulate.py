@@ -139,12 +139,13 @@ def test_board_on_frame_zero_gives_the_camera_pose(sessions):
     s = load_session(folder)
     b = s.camera.board
     _, _, frame0 = next(iter_frames(probe_video(s.camera.video)))
-    pose = board_pose(frame0, make_board(b.squares, b.square_m, b.marker_m, b.dictionary),
-                      read_camera_yaml(s.camera.intrinsics))
+    board = make_board(b.squares, b.square_m, b.marker_m, b.dictionary)
     eye = -truth["R_WC"].T @ truth["T_WC"]
-    assert np.linalg.norm(pose.camera_position_W - eye) < 0.01
-    dR = pose.R_WC @ truth["R_WC"].T
-    assert np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))) < 0.5
+    for corners in ("opencv", "saddle"):  # calibrate.corners
+        pose = board_pose(frame0, board, read_camera_yaml(s.camera.intrinsics), corners=corners)
+        assert np.linalg.norm(pose.camera_position_W - eye) < 0.01
+        dR = pose.R_WC @ truth["R_WC"].T
+        assert np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))) < 0.5
     # W's axes as the contract says: the camera looks down (its z has negative z_W) from above
     assert pose.camera_position_W[2] > 0.3 and pose.R_WC[2] @ [0, 0, 1] < 0
 

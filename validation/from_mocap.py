@@ -27,7 +27,11 @@ sys.path.insert(0, str(REPO))
 
 from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.core.errors import ArmtrackError  # noqa: E402
+from armtrack_cli.fuse import camera_pose  # noqa: E402
+from armtrack_cli.fuse.models import Projection  # noqa: E402
 from armtrack_cli.session.arm_file import read_arm_estimate  # noqa: E402
+from armtrack_cli.session.camera_yaml import read_camera_yaml  # noqa: E402
+from armtrack_cli.session.config import load_session  # noqa: E402
 from armtrack_cli.session.tables import read_trajectory  # noqa: E402
 from armtrack_cli.simulate.arm_session import ArmSimSettings  # noqa: E402
 from armtrack_cli.simulate.from_mocap import MocapSimSettings  # noqa: E402
@@ -54,42 +58,22 @@ def as_auto(folder: Path, dest: Path) -> Path:
     return dest
 
 
+# every session here is calibrated from the board's corners refined to the image's saddle
+# points (calibrate/saddle.py); the recipes keep OpenCV's (docs/fusion.md says why)
+CORNERS = ("calibrate.corners=saddle",)
+
+
 def wrist_rmse(folder: Path, method: str = "pf-constraint", sets: tuple[str, ...] = (),
                out: Path | None = None) -> float:
-    pipeline.run(folder, through="fuse", methods=(method,), sets=sets, out=out)
+    pipeline.run(folder, through="fuse", methods=(method,), sets=CORNERS + sets, out=out)
     rows = pipeline.compare(folder, methods=(method,), out=out)["rows"]
     return next(r["rmse_cm"] for r in rows if r["joint"] == "wrist" and r["axis"] == "3d")
 
 
-def rest_sets(rates: tuple[float, ...]) -> tuple[str, ...]:
-    """The rest update (fuse/rest.py): v = 0 where the hand rests, ± the resting hand's
-    velocity per axis measured on the other trials (rates' last, mocap_rates.rest_speed)."""
-    return (f"fuse.rest_velocity_sd_m_s={rates[8]:.4f}",)
-
-
-# the scored run also corrects the camera's pose from the board's covariance (fuse/camera_pose.py)
-CAMERA = ("fuse.camera_pose=board",)
-
-
-def trial_rates(others: list[Path]) -> tuple[float, ...]:
-    """Everything the scored run takes from the other trials' recordings: the drifting arm's
-    walk rates and prior (drift_sets), then the resting hand's velocity SD (rest_sets)."""
-    return (mocap_rates.walk_rates(others) + mocap_rates.arm_priors(others)
-            + (mocap_rates.rest_speed(others),))
-
-
-def drift_sets(rates: tuple[float, ...], side: float = 1.0, offset: bool = True
-               ) -> tuple[str, ...]:
-    """The drifting arm with the shoulder's and the upper arm's walk rates (m/√s), priors (m)
-    and the prior's offset from the declared arm (x for a right arm; ``side`` −1 mirrors it
-    for a left one) measured on the other trials (mocap_rates.walk_rates, arm_priors), not
-    the scored. ``offset`` False: none (an "auto" arm is already the elbow's sphere)."""
-    walk_s, walk_l, sd_s, sd_l, dx, dy, dz, dl = rates[:4] + (rates[4:8] if offset else (0.0,) * 4)
-    return ("fuse.shoulder=drifting", f"fuse.shoulder_walk_m_s={walk_s:.4f}",
-            f"fuse.upper_arm_walk_m_s={walk_l:.4f}", f"fuse.shoulder_sd_m={sd_s:.4f}",
-            f"fuse.upper_arm_sd_m={sd_l:.4f}", f"fuse.shoulder_offset_x_m={side * dx:.4f}",
-            f"fuse.shoulder_offset_y_m={dy:.4f}", f"fuse.shoulder_offset_z_m={dz:.4f}",
-            f"fuse.upper_arm_offset_m={dl:.4f}")
+def detect_all(folders: list[Path]) -> None:
+    """calibrate and detect on every session (SESSION/armtrack/), for pixel_sd's leave-one-out."""
+    for folder in folders:
+        pipeline.run(folder, through="detect", sets=CORNERS)
 
 
 def smoother_row(name: str, what: str, folder: Path, rates: tuple[float, ...]
@@ -98,11 +82,11 @@ def smoother_row(name: str, what: str, folder: Path, rates: tuple[float, ...]
     the drifting arm with the rest update (scored: goal ≤ 1.5 cm), with the declared arm, and
     fixed / drifting with rest with the "auto" arm (wrist 3-D RMSE, cm)."""
     auto_folder = folder.parent / f"{folder.name}-auto"
-    drift = drift_sets(rates, mocap_rates.side_sign(folder.parent / f"{folder.name}.truth.npz"))
+    drift = mocap_rates.drift_sets(rates, mocap_rates.side_sign(folder.parent / f"{folder.name}.truth.npz"))
     runs = [(folder, (), "smoother-fixed"), (folder, drift, "smoother-drifting"),
-            (folder, drift + rest_sets(rates) + CAMERA, "smoother-drifting-rest"),
+            (folder, drift + mocap_rates.scored_sets(rates), "smoother-drifting-rest"),
             (auto_folder, (), "smoother-fixed"),
-            (auto_folder, drift_sets(rates, offset=False) + rest_sets(rates) + CAMERA,
+            (auto_folder, mocap_rates.drift_sets(rates, offset=False) + mocap_rates.scored_sets(rates),
              "smoother-drifting")]
     v, why = [], ""
     for f, sets, sub in runs:
@@ -128,8 +112,11 @@ def budget_rows(name: str, folder: Path, smoothed: list[float], rates: tuple[flo
     truth = folder.parent / f"{folder.name}.truth.npz"
     geo = mocap_budget.geometry(truth)
     no_arm = [wrist_rmse(folder, "arm-smoother", sets, out=folder / sub) for sets, sub in
-              ((NO_ARM, "smoother-no-arm"), (NO_ARM + rest_sets(rates), "smoother-no-arm-rest"))]
-    return (mocap_budget.ray_row(name, mocap_budget.detection(folder, truth), geo),
+              ((NO_ARM, "smoother-no-arm"), (NO_ARM + mocap_rates.rest_sets(rates), "smoother-no-arm-rest"))]
+    cam = read_camera_yaml(folder / "armtrack" / "camera.yaml")
+    pose = mocap_budget.pose_error(cam.R_WC, cam.T_WC, camera_pose.board_prior(
+        Projection(cam), load_session(folder).camera.board), truth)
+    return (mocap_budget.ray_row(name, mocap_budget.detection(folder, truth), geo, pose),
             mocap_budget.budget_row(name, geo, *smoothed[:3], *no_arm))
 
 
@@ -155,8 +142,9 @@ def truth_row(name: str, folder: Path, rates: tuple[float, ...], tmp: Path) -> s
     cells = []
     for k, (parts, extra) in enumerate(TRUTH_RUNS):
         session, work = mocap_budget.with_truth(folder, scored, tmp / f"{name}-truth{k}", **parts)
-        sets = drift_sets(rates, mocap_rates.side_sign(truth)) + (
-            () if extra == "no rest" else rest_sets(rates) + tuple(extra)) + CAMERA
+        rest = () if extra == "no rest" else mocap_rates.rest_sets(rates) + tuple(extra)
+        sets = (mocap_rates.drift_sets(rates, mocap_rates.side_sign(truth)) + rest
+                + mocap_rates.pixel_sets(rates))
         pipeline.fuse(session, method="arm-smoother", sets=sets, out=work)
         cells.append(_where(work, truth, det["ok"] == 1)["rmse"])
     return mocap_budget.where_row(name, w, cells)
@@ -169,14 +157,15 @@ def scored_at_seed(seed: int, base: Path) -> tuple[dict[str, float], list[str]]:
     for trial in TASKS:
         pipeline.simulate_from_mocap(base / trial, UE_ADL / f"ADL001{trial}.csv",
                                      MocapSimSettings(seed=seed))
+    detect_all([base / trial for trial in TASKS])
     values, misses = {}, []
     for trial in TASKS:
         folder = base / trial
         others = [base / f"{o}.truth.npz" for o in TASKS if o != trial]
-        rates = trial_rates(others)
-        drift = drift_sets(rates, mocap_rates.side_sign(base / f"{trial}.truth.npz"))
+        rates = mocap_rates.trial_rates(others)
+        drift = mocap_rates.drift_sets(rates, mocap_rates.side_sign(base / f"{trial}.truth.npz"))
         try:
-            values[trial] = wrist_rmse(folder, "arm-smoother", drift + rest_sets(rates) + CAMERA,
+            values[trial] = wrist_rmse(folder, "arm-smoother", drift + mocap_rates.scored_sets(rates),
                                        out=folder / "smoother-drifting-rest")
         except ArmtrackError:  # a stage refused: shown as not computable
             values[trial] = float("nan")
@@ -275,6 +264,7 @@ def main() -> None:
             for trial in TASKS:
                 pipeline.simulate_from_mocap(Path(tmp) / trial, UE_ADL / f"ADL001{trial}.csv",
                                              MocapSimSettings(seed=mocap_seeds[0]))
+            detect_all([Path(tmp) / trial for trial in TASKS])
             for trial, what in TASKS.items():
                 folder = Path(tmp) / trial
                 try:
@@ -282,7 +272,7 @@ def main() -> None:
                 except ArmtrackError as e:  # a stage refused this session: say why, go on
                     mocap.append(f"| {trial} | {what} | not computable: {e} |||||||")
                 others = [Path(tmp) / f"{o}.truth.npz" for o in TASKS if o != trial]
-                rates = trial_rates(others)
+                rates = mocap_rates.trial_rates(others)
                 rates_used.append(rates)
                 row_s, smoothed = smoother_row(trial, what, folder, rates)
                 smoother.append(row_s)
@@ -328,7 +318,10 @@ def write(out: Path, mocap: list[str], synthetic: list[str], smoother: list[str]
         "the default `arm-smoother` with the paper's fixed shoulder and with the drifting "
         "shoulder state (`--set fuse.shoulder=drifting`). Goals "
         "(issue 14): with `[arm] … = \"auto\"`, shoulder within 2 cm, lengths within 1 cm, wrist "
-        "RMSE within 20 % of the declared-model figure. SDs are the estimator's own.", "",
+        "RMSE within 20 % of the declared-model figure. SDs are the estimator's own. Every "
+        "session is calibrated with `--set calibrate.corners=saddle` (the board's corners "
+        "refined to the image's saddle points, calibrate/saddle.py; the recipes keep OpenCV's).",
+        "",
         "## UE-ADL trials (`armtrack simulate --from-mocap`)", "",
         f"Subject ADL001 of the UE-ADL database (Vicon 100 Hz, MIT licence), seed {mocap_seeds[0]}. "
         "The errors "
@@ -342,12 +335,12 @@ def write(out: Path, mocap: list[str], synthetic: list[str], smoother: list[str]
         "walks from a prior centred on the declared arm moved by where the elbow's sphere lies "
         "from it (`shoulder_offset_*_m`, `upper_arm_offset_m`) and as wide as the trials spread "
         "about that (docs/fusion.md), offsets, spreads and rates measured on the other six "
-        "trials (below); *+ rest*: also `--set "
-        "fuse.rest_velocity_sd_m_s=0.01`, zero velocity where the hand rests (IMU quiet and "
-        "patch still, fuse/rest.py), the smoother started on the IMU recorded before the video, "
-        "and the camera's pose corrected as six static states from the board's covariance "
-        "(`--set fuse.camera_pose=board`, fuse/camera_pose.py; it moved CR1 by 0.04-0.09 cm and "
-        "no other trial-seed by more than 0.01 cm, docs/fusion.md). "
+        "trials (below); *+ rest*: also `--set fuse.rest_velocity_sd_m_s=…`, zero velocity "
+        "where the hand rests (IMU quiet and patch still, fuse/rest.py), the smoother started on "
+        "the IMU recorded before the video, the camera's pose corrected as six static states "
+        "from the board's covariance (`--set fuse.camera_pose=board`, fuse/camera_pose.py), and "
+        "the camera rows' SD `detect`'s pixel error measured on the other trials (`--set "
+        "fuse.pixel_sigma=…`, 0.18-0.20 px, instead of the recipe's 4 px). "
         "Scored: the drifting arm + rest with the declared arm (bold column).", "",
         *SMOOTHER, *(smoother or ["| (../shared/realdata/ue-adl/ not present) ||||||"]), "",
         *by_seed,

@@ -1,7 +1,7 @@
 """What the scored run of a real-motion session takes from the other recordings
-(validation/from_mocap.py, leave-one-out): the drifting arm's random-walk rates and prior, and
-the resting hand's velocity (the rest update's SD), each measured on the truth of trials other
-than the one scored."""
+(validation/from_mocap.py, leave-one-out): the drifting arm's random-walk rates and prior, the
+resting hand's velocity (the rest update's SD) and detect's pixel error (the camera rows' SD),
+each measured on the truth of trials other than the one scored, and the settings they make."""
 
 from __future__ import annotations
 
@@ -65,3 +65,63 @@ def rest_speed(truths: list[Path]) -> float:
         v = tr["wrist_vel"][np.linalg.norm(tr["wrist_vel"], axis=1) < STILL_M_S]
         rms.append(np.sqrt(np.mean(v**2)) if v.size else np.nan)
     return float(np.nanmedian(rms))
+
+
+def pixel_sd(truths: list[Path]) -> float:
+    """How far `detect`'s wrist pixel lies from the truth, measured on the other sessions: the
+    RMS per axis (px) of (u, v) − the true wrist pixel over their frames with ok = 1, pooled
+    (each session's detections.csv in SESSION/armtrack/, beside OUT.truth.npz). The camera
+    rows' SD of the scored run (fuse.pixel_sigma) instead of the recipe's 4 px, which stood
+    for the camera pose's error too; that error has its own states (fuse.camera_pose)."""
+    err = []
+    for path in truths:
+        tr = np.load(path)
+        folder = path.parent / path.name.removesuffix(".truth.npz")
+        det = np.genfromtxt(folder / "armtrack" / "detections.csv", delimiter=",", names=True)
+        n = tr["frame_t"].size
+        ok = det["ok"][:n] == 1
+        err.append((np.c_[det["u"][:n], det["v"][:n]] - tr["frame_wrist_px"][:n])[ok])
+    return float(np.sqrt(np.mean(np.concatenate(err) ** 2)))
+
+
+def rest_sets(rates: tuple[float, ...]) -> tuple[str, ...]:
+    """The rest update (fuse/rest.py): v = 0 where the hand rests, ± the resting hand's
+    velocity per axis measured on the other trials (rates[8], rest_speed)."""
+    return (f"fuse.rest_velocity_sd_m_s={rates[8]:.4f}",)
+
+
+# the scored run also corrects the camera's pose from the board's covariance (fuse/camera_pose.py)
+CAMERA = ("fuse.camera_pose=board",)
+
+
+def trial_rates(others: list[Path]) -> tuple[float, ...]:
+    """Everything the scored run takes from the other trials' recordings: the drifting arm's
+    walk rates and prior (drift_sets), then the resting hand's velocity SD (rest_sets) and
+    detect's pixel error (scored_sets; their detections must exist, detect_all)."""
+    return (walk_rates(others) + arm_priors(others)
+            + (rest_speed(others), pixel_sd(others)))
+
+
+def pixel_sets(rates: tuple[float, ...]) -> tuple[str, ...]:
+    """The camera's pose corrected from the board's covariance, and the camera rows' SD
+    detect's pixel error as measured on the other trials (pixel_sd)."""
+    return CAMERA + (f"fuse.pixel_sigma={rates[9]:.4f}",)
+
+
+def scored_sets(rates: tuple[float, ...]) -> tuple[str, ...]:
+    """The scored run's settings beside the drifting arm: the rest update and pixel_sets."""
+    return rest_sets(rates) + pixel_sets(rates)
+
+
+def drift_sets(rates: tuple[float, ...], side: float = 1.0, offset: bool = True
+               ) -> tuple[str, ...]:
+    """The drifting arm with the shoulder's and the upper arm's walk rates (m/√s), priors (m)
+    and the prior's offset from the declared arm (x for a right arm; ``side`` −1 mirrors it
+    for a left one) measured on the other trials (walk_rates, arm_priors), not
+    the scored. ``offset`` False: none (an "auto" arm is already the elbow's sphere)."""
+    walk_s, walk_l, sd_s, sd_l, dx, dy, dz, dl = rates[:4] + (rates[4:8] if offset else (0.0,) * 4)
+    return ("fuse.shoulder=drifting", f"fuse.shoulder_walk_m_s={walk_s:.4f}",
+            f"fuse.upper_arm_walk_m_s={walk_l:.4f}", f"fuse.shoulder_sd_m={sd_s:.4f}",
+            f"fuse.upper_arm_sd_m={sd_l:.4f}", f"fuse.shoulder_offset_x_m={side * dx:.4f}",
+            f"fuse.shoulder_offset_y_m={dy:.4f}", f"fuse.shoulder_offset_z_m={dz:.4f}",
+            f"fuse.upper_arm_offset_m={dl:.4f}")

@@ -84,6 +84,15 @@ def board_covariance(proj: Projection, corners_W: np.ndarray, sigma_px: float) -
     return sigma_px**2 * np.linalg.inv(J.T @ J)
 
 
+def board_prior(proj: Projection, board) -> np.ndarray | None:
+    """board_covariance of ``proj``'s pose from the session's [camera] board (its squares and
+    square_m) and the reprojection error calibrate wrote; None without either."""
+    err = proj.cam.reprojection_error_px
+    if board is None or not err:
+        return None
+    return board_covariance(proj, board_corners_W(board.squares, board.square_m), err)
+
+
 def moved(proj: Projection, c: np.ndarray) -> Projection:
     """``proj`` with its pose corrected by c = (φ, τ): R' = exp([φ]×) R, T' = exp([φ]×) T + τ."""
     rot = _rotation(np.asarray(c[:3], float))[0]

@@ -8,11 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from armtrack_cli.calibrate.board_pose import CalibrateSettings, board_pose
+from armtrack_cli.calibrate.board_pose import CORNERS, CalibrateSettings, board_pose
 from armtrack_cli.calibrate.intrinsics import MIN_VIEWS, calibrate_intrinsics
 from armtrack_cli.calibrate.lift import lift_pixels
 from armtrack_cli.calibrate.palm_model import PalmFit, label_palm
-from armtrack_cli.core.errors import CalibrationError
+from armtrack_cli.core.errors import CalibrationError, ConfigError, did_you_mean
 from armtrack_cli.core.streams import CameraModel
 from armtrack_cli.detect.palm_blobs import PalmBlobDetector
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
@@ -74,6 +74,10 @@ def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None
     require(session, "camera", "video", "intrinsics", "board")
     doc, where = resolve_recipe(recipe, sets)
     settings = section(doc, "calibrate", CalibrateSettings, where)
+    if settings.corners not in CORNERS:
+        raise ConfigError(where, f"[calibrate] corners = {settings.corners!r} is not one of "
+                          f"{', '.join(CORNERS)}", did_you_mean(settings.corners, CORNERS,
+                                                                what="choices"))
     cam, info = _intrinsics(session)
     video = probe_video(session.camera.video)
     if (video.width, video.height) != (cam.width, cam.height):
@@ -81,7 +85,8 @@ def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None
                                f"but the video is {video.width}x{video.height}")
     image = read_frame(video, frame)
     b = session.camera.board
-    pose = board_pose(image, make_board(b.squares, b.square_m, b.marker_m, b.dictionary), cam)
+    pose = board_pose(image, make_board(b.squares, b.square_m, b.marker_m, b.dictionary), cam,
+                      corners=settings.corners)
     if pose is None:
         raise CalibrationError(video.path, f"frame {frame}: no ChArUco board found",
                                "try another --frame where the board lies whole and unoccluded")

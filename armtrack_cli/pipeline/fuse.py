@@ -82,11 +82,7 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
         arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
                          L2=session.arm.forearm_m, forearm_B=session.imu.forearm_unit)
     proj = models.Projection(cam)
-    board = session.camera.board
-    if board is not None and cam.reprojection_error_px:  # the pose's own uncertainty
-        proj.pose_cov = camera_pose.board_covariance(
-            proj, camera_pose.board_corners_W(board.squares, board.square_m),
-            cam.reprojection_error_px)
+    proj.pose_cov = camera_pose.board_prior(proj, session.camera.board)  # its own uncertainty
     known = arm if session.arm is None or not session.arm.auto else None  # "auto": not yet
     q_anch = gyro_anchored(imu.t[ok], q_imu, imu.gyr[ok])
     offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_anch,

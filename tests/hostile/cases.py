@@ -193,6 +193,8 @@ ARM_CASES = [
     ("set-seed-negative", FUSE + ["--set", "fuse.seed=-1"], nothing, "--set", "outside"),
     ("set-min-area-negative", DETECT + ["--set", "detect.patch.min_area_px=-1"], nothing, "--set",
      "outside"),
+    ("set-corners-misspelt", CALIB + ["--set", "calibrate.corners=sadle"], nothing, "--set",
+     "is not one of opencv, saddle"),
     ("set-max-error-inf", CALIB + ["--set", "calibrate.max_error_px=inf"], nothing, "--set",
      "finite"),
     ("set-method-typo", FUSE[:2] + ["--set", "fuse.method=ekff"], nothing, "--set",
