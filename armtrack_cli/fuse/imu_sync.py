@@ -146,19 +146,6 @@ def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Pr
                      v_imu, dt, window)
 
 
-def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice) -> np.ndarray:
-    """(k, 2, 3) px/s per m/s² at the frames ``sl``: the image velocity J_k ∫R_WB β dt per unit
-    accelerometer bias β in B at t_k − δ (eq. 4: a bias in B turns with the forearm, so its
-    velocity error is not a smooth drift), smoothed as the image side is."""
-    t = np.clip(p.t_frames[sl] - delta, p.t_imu[0], p.t_imu[-1])
-    lo, hi = np.searchsorted(p.t_imu, [t[0], t[-1]])  # the samples these frames fall between
-    s = slice(max(lo - 1, 0), hi + 1)
-    at = np.stack([np.interp(t, p.t_imu[s], pre.rint[s, i, j]) for i in range(3)
-                   for j in range(3)], -1).reshape(-1, 3, 3)
-    cols = np.einsum("kij,kja->kia", pre.J[sl], at)
-    return _savgol(cols.reshape(-1, 6), pre.window, 0, pre.dt).reshape(-1, 2, 3)
-
-
 def _bridge(x: np.ndarray, most: int) -> np.ndarray:
     """x (n, d) with runs of at most ``most`` missing rows between two present ones filled
     linearly (for the derivative only: a lost frame or two must not void a whole window);
@@ -195,15 +182,27 @@ def _imu_covers(p: SyncProblem, t: np.ndarray) -> np.ndarray:
     return (t >= p.t_imu[0]) & (t <= p.t_imu[-1]) & (p.t_imu[j] - p.t_imu[j - 1] <= GAP_S)
 
 
-def predicted(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None)
-              ) -> np.ndarray:
-    """V(δ) (k, 2) px/s at the frames ``sl``: the IMU's integrated velocity at t_k − δ (smooth
-    in δ; NaN outside the recording or across a gap longer than GAP_S) projected by J_k (eq.
-    7's Jacobian: u̇ = J v exactly), smoothed as the image side is."""
+def _lerp(t: np.ndarray, y: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """y (M, …) linearly interpolated at x (k,) inside [t[0], t[-1]] (np.interp's formula, on
+    every column at once)."""
+    j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 2)
+    f = ((x - t[j]) / (t[j + 1] - t[j])).reshape((-1,) + (1,) * (y.ndim - 1))
+    return y[j] + f * (y[j + 1] - y[j])
+
+
+def columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None)
+            ) -> np.ndarray:
+    """W(δ) (k, 2, 4) px/s at the frames ``sl``, smoothed as the image side is: V(δ) = J_k
+    v(t_k − δ), the IMU's integrated velocity at t_k − δ (smooth in δ; NaN outside the
+    recording or across a gap longer than GAP_S) projected by J_k (eq. 7's Jacobian: u̇ = J v
+    exactly); and J_k ∫R_WB dt per unit accelerometer bias β in B at t_k − δ (eq. 4: a bias
+    in B turns with the forearm, so its velocity error is not a smooth drift)."""
     t = p.t_frames[sl] - delta
     v = hermite(p.t_imu, pre.v_imu, p.a_W, t)
     v[~_imu_covers(p, t)] = np.nan
-    return _savgol(np.einsum("kij,kj->ki", pre.J[sl], v), pre.window, 0, pre.dt)
+    at = _lerp(p.t_imu, pre.rint, np.clip(t, p.t_imu[0], p.t_imu[-1]))  # (k, 3, 3)
+    W = pre.J[sl] @ np.concatenate([v[:, :, None], at], axis=2)  # (k, 2, 4)
+    return _savgol(W.reshape(-1, 8), pre.window, 0, pre.dt).reshape(-1, 2, 4)
 
 
 def _chunks(p: SyncProblem, pre: _Prepared, delta: float, spans=None):
@@ -214,8 +213,7 @@ def _chunks(p: SyncProblem, pre: _Prepared, delta: float, spans=None):
     n, h = p.t_frames.size, pre.window // 2
     for a, b in spans or ((a, min(a + CHUNK, n)) for a in range(0, n, CHUNK)):
         sl = slice(max(a - h, 0), min(b + h, n))
-        W = np.concatenate([predicted(p, pre, delta, sl)[:, :, None],
-                            _bias_columns(p, pre, delta, sl)], axis=2)[a - sl.start:b - sl.start]
+        W = columns(p, pre, delta, sl)[a - sl.start:b - sl.start]
         yield a, b, W, np.isfinite(W).all(axis=(1, 2)) & np.isfinite(pre.vel_img[a:b]).all(axis=1)
 
 
