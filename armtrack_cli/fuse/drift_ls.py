@@ -81,13 +81,44 @@ def normal_parts(D: Drift, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float
 
 def banded_solver(ab: np.ndarray):
     """G⁻¹ for G + RIDGE·I, G = DᵀD in upper banded form, by its Cholesky factor: a function
-    of the right-hand side."""
-    from scipy.linalg import cho_solve_banded, cholesky_banded
+    of the right-hand side (r (N,) or (N, c)). With b = U + 1 the band's width, G is block
+    tridiagonal in b × b blocks (diagonal D_i, above it C_i); its factor L Lᵀ has diagonal
+    blocks L_i = chol(D_i − M_{i−1} M_{i−1}ᵀ) and below them M_i = C_iᵀ L_i⁻ᵀ (Golub & Van
+    Loan, Matrix Computations, 4th ed., §4.5.4), each a dense b × b step in numpy: no
+    scipy.linalg to import (half a second, issue 15), N / b steps."""
+    U = ab.shape[0] - 1
+    b, N = U + 1, ab.shape[1]
+    nb = -(-N // b)
+    Dg, Cg = np.zeros((nb, b, b)), np.zeros((max(nb - 1, 0), b, b))
+    Dg[:, np.arange(b), np.arange(b)] = 1.0  # the padding's rows beyond N: decoupled, unit
+    for o in range(U + 1):  # the o-th diagonal above the main one: G[j − o, j]
+        j = np.arange(o, N)
+        i, v = j - o, ab[U - o, o:]
+        same = i // b == j // b
+        Dg[i[same] // b, i[same] % b, j[same] % b] = v[same]
+        Dg[i[same] // b, j[same] % b, i[same] % b] = v[same]
+        Cg[i[~same] // b, i[~same] % b, j[~same] % b] = v[~same]
+    Dg[:, np.arange(b), np.arange(b)] += RIDGE
+    Li, M = np.empty_like(Dg), np.empty_like(Cg)  # L_k⁻¹ and M_k
+    for k in range(nb):
+        S = Dg[k] - M[k - 1] @ M[k - 1].T if k else Dg[k]
+        Li[k] = np.linalg.inv(np.linalg.cholesky(S))
+        if k < nb - 1:
+            M[k] = (Li[k] @ Cg[k]).T  # C_kᵀ L_k⁻ᵀ
+    LiT, MT = Li.transpose(0, 2, 1).copy(), M.transpose(0, 2, 1).copy()
 
-    ab = ab.copy()
-    ab[-1] += RIDGE
-    factor = cholesky_banded(ab, lower=False)
-    return lambda rhs: cho_solve_banded((factor, False), rhs)
+    def solve(rhs: np.ndarray) -> np.ndarray:
+        y = np.zeros((nb, b) + rhs.shape[1:])
+        y.reshape((nb * b,) + rhs.shape[1:])[:N] = rhs
+        for k in range(nb):  # L y = r
+            y[k] = Li[k] @ (y[k] - M[k - 1] @ y[k - 1] if k else y[k])
+        for k in range(nb - 2, -1, -1) if nb > 1 else ():  # Lᵀ x = y
+            y[k + 1] = LiT[k + 1] @ y[k + 1]
+            y[k] -= MT[k] @ y[k + 1]
+        y[0] = LiT[0] @ y[0]
+        return y.reshape((nb * b,) + rhs.shape[1:])[:N].copy()
+
+    return solve
 
 
 class Drift:
