@@ -82,29 +82,34 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
 
 
 class _Store:
-    """The filtered states (x, P's upper triangle) of the latest blocks, at most ``mb`` MB:
-    putting a block drops the earliest ones beyond that."""
+    """The filtered states (x, P's upper triangle) of the latest blocks, at most ``mb`` MB: a
+    ring of rows in two arrays (pages touched only as rows are written, all returned at once
+    when the pass ends); putting a block drops the earliest ones it would overwrite."""
 
     def __init__(self, d: int, mb: float):
         self.iu = np.triu_indices(d)
         self.cap = int(mb * 2**20 / (8 * (d + self.iu[0].size)))  # rows
-        self.blocks: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # in the order put
-        self.rows = 0
+        self.x, self.tri = np.empty((self.cap, d)), np.empty((self.cap, self.iu[0].size))
+        self.blocks: dict[int, tuple[int, int]] = {}  # block: (first row, rows), in the order put
+        self.head = self.used = 0
 
     def put(self, i: int, xf: np.ndarray, Pf: np.ndarray) -> None:
-        if xf.shape[0] > self.cap:
+        k = xf.shape[0]
+        if k > self.cap:
             return
-        while self.rows + xf.shape[0] > self.cap:
-            self.rows -= self.blocks.pop(next(iter(self.blocks)))[0].shape[0]
-        self.blocks[i] = xf.copy(), Pf[:, self.iu[0], self.iu[1]]
-        self.rows += xf.shape[0]
+        while self.used + k > self.cap:  # the earliest blocks lie just after the latest
+            self.used -= self.blocks.pop(next(iter(self.blocks)))[1]
+        rows = (self.head + np.arange(k)) % self.cap
+        self.x[rows], self.tri[rows] = xf, Pf[:, self.iu[0], self.iu[1]]
+        self.blocks[i] = self.head, k
+        self.head, self.used = (self.head + k) % self.cap, self.used + k
 
     def take(self, i: int, xf: np.ndarray, Pf: np.ndarray) -> None:
-        """Block i's states into xf, Pf, and out of the store."""
-        x, tri = self.blocks.pop(i)
-        k = x.shape[0]
-        self.rows -= k
-        xf[:k] = x
+        """Block i's states into xf, Pf (the backward pass: nothing is put after)."""
+        first, k = self.blocks.pop(i)
+        rows = (first + np.arange(k)) % self.cap
+        xf[:k] = self.x[rows]
+        tri = self.tri[rows]
         Pf[:k, self.iu[0], self.iu[1]] = tri
         Pf[:k, self.iu[1], self.iu[0]] = tri
 
