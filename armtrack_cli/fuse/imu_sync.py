@@ -19,8 +19,12 @@ J_k is taken where the detection's ray meets the
 arm's sphere (eq. 15, the IMU's orientation at t_k − δ). Cost: the fit's mean squared
 residual over the frames both cover. A grid at one frame period over the search window (scored
 every COARSE periods, then at every period about the best of those) finds
-the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
-SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
+the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames,
+stopping within XATOL_S. A session of ROUGH_MIN_S or more has the grid's coarse pass scored on
+ROUGH_WINDOWS windows spread over it (two minutes in all: the basin is as clear there), the
+fine pass and the refinement on every frame.
+SD: from the curvature of the residual sum of squares (profiled over c and d; the three sums
+from the cost's normal equations, one factorisation), inflated by
 (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
 The drift's columns have K = DRIFT_DEGREE + 1 non-zeros per frame and axis, so the fits are
 banded least squares (fuse/drift_ls.py), linear in the session's length in time. Memory: the
