@@ -9,13 +9,15 @@ each block (a checkpoint) and the filtered states of the latest blocks that fit 
 backward pass, block by block from the last, smooths each block from the next block's first
 smoothed state: from the store where it holds the block, else after running the filter again
 over it from its checkpoint (the same arithmetic as the first run, so the result equals the
-plain pass either way: tests/test_smoother_blocks.py). A session whose filtered states fit in
-the store (about 25,000 rows at d = 15: a 10-minute session) runs the filter once; a longer one
-runs it again over the blocks beyond, and its memory stays the store's.
+plain pass either way: tests/test_smoother_blocks.py). The store holds about 7,700 rows at
+d = 15 (a third of a 10-minute session's; a larger one raised fuse's peak, the measures' after
+the smoother, by as much): the filter runs again only over the blocks before those, and the
+memory stays the store's however long the session.
 """
 
 from __future__ import annotations
 
+import mmap
 from collections.abc import Callable
 
 import numpy as np
@@ -23,7 +25,8 @@ import numpy as np
 from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
 
 BLOCK = 1024  # frames per block: ~2 MB of covariances at d = 15
-STORE_MB = 32  # the filtered states kept for the backward pass, at most
+STORE_MB = 8  # the filtered states kept for the backward pass, at most (a third of a
+#              10-minute session's: more would raise fuse's peak, measures' at the end)
 
 # model(lo, hi) -> (F, b, Q, Hc, zc, use_c, Hk, zk, use_k) for frames lo … hi − 1 (row j is
 # frame lo + j; F[j], b[j], Q[j] the step into it; row 0 of the session's first block unused);
@@ -89,7 +92,7 @@ class _Store:
     def __init__(self, d: int, mb: float):
         self.iu = np.triu_indices(d)
         self.cap = int(mb * 2**20 / (8 * (d + self.iu[0].size)))  # rows
-        self.x, self.tri = np.empty((self.cap, d)), np.empty((self.cap, self.iu[0].size))
+        self.x, self.tri = _returned((self.cap, d)), _returned((self.cap, self.iu[0].size))
         self.blocks: dict[int, tuple[int, int]] = {}  # block: (first row, rows), in the order put
         self.head = self.used = 0
 
@@ -112,6 +115,15 @@ class _Store:
         tri = self.tri[rows]
         Pf[:k, self.iu[0], self.iu[1]] = tri
         Pf[:k, self.iu[1], self.iu[0]] = tri
+
+
+def _returned(shape: tuple[int, int]) -> np.ndarray:
+    """An array in its own anonymous mapping: its pages are the operating system's again when
+    it is freed (from malloc's heap, a freed store stayed in the process's memory)."""
+    n = shape[0] * shape[1] * 8
+    if n == 0:
+        return np.empty(shape)
+    return np.frombuffer(mmap.mmap(-1, n), dtype=np.float64).reshape(shape)
 
 
 def _split(m: tuple, size: int) -> tuple[tuple, np.ndarray | None]:
