@@ -248,3 +248,79 @@ def test_chunked_columns_and_rays_equal_the_whole_sessions(monkeypatch):
     assert np.array_equal(whole[1], split[1])
     assert np.allclose(whole[2], split[2], rtol=1e-9, atol=0)
     assert np.allclose(whole[3], split[3], rtol=0, atol=1e-9 * np.abs(whole[3]).max())
+
+
+def _gappy(seed=2):
+    """A figure8 problem with 10 % of the detections missing and a 0.3 s IMU gap."""
+    p = case(0.2, task="figure8", seed=1)
+    uv = p.uv.copy()
+    uv[np.random.default_rng(seed).random(uv.shape[0]) < 0.1] = np.nan
+    keep = (p.t_imu < 7.0) | (p.t_imu > 7.3)
+    return replace(p, uv=uv, t_imu=p.t_imu[keep], a_W=p.a_W[keep], q_WB=p.q_WB[keep])
+
+
+def test_usable_frames_are_where_the_columns_are_finite():
+    """_usable finds the scorable frames from the IMU's coverage alone; they are the frames
+    where the columns themselves and the image velocity are finite, at offsets that move the
+    gap and the recording's ends across the frames."""
+    from armtrack_cli.fuse import imu_sync
+
+    p = _gappy()
+    pre = imu_sync._prepare(p, 0.2)
+    for delta in (-0.4, 0.0, 0.2, 0.23, 0.61):
+        W = imu_sync.columns(p, pre, delta)
+        want = np.isfinite(W).all(axis=(1, 2)) & np.isfinite(pre.vel_img).all(axis=1)
+        assert want.sum() > 100 and not want.all()
+        assert np.array_equal(imu_sync._usable(p, pre, delta), want)
+
+
+def test_bias_columns_interpolate_as_numpy_does():
+    """The bias's columns take ∫R dt at t − δ by one interpolation of its nine entries: each
+    entry as np.interp gives it (to rounding)."""
+    from armtrack_cli.fuse import imu_sync
+
+    p = _gappy()
+    rng = np.random.default_rng(4)
+    x = np.sort(rng.uniform(p.t_imu[0], p.t_imu[-1], 500))
+    y = rng.normal(size=(p.t_imu.size, 3, 3))
+    got = imu_sync._lerp(p.t_imu, y, x)
+    for i in range(3):
+        for j in range(3):
+            assert np.allclose(got[:, i, j], np.interp(x, p.t_imu, y[:, i, j]), rtol=0,
+                               atol=1e-14)
+
+
+def test_the_sds_sums_of_squares_are_the_fits():
+    """The SD's residual sums of squares come from the cost's normal equations (one
+    factorisation for the three offsets): each equals the sum of the squared residuals of the
+    bordered least squares (fuse/drift_ls.fit_bordered, held to numpy's lstsq)."""
+    from armtrack_cli.fuse import imu_sync
+
+    p = _gappy()
+    pre = imu_sync._prepare(p, 0.2)
+    ok = imu_sync._usable(p, pre, 0.18) & imu_sync._usable(p, pre, 0.22)
+    cache: dict = {}
+    for delta in (0.18, 0.2, 0.22):
+        r, _ = imu_sync._fit(p, pre, delta, ok)
+        rss = imu_sync.cost(delta, p, pre, 0, cache, ok) * ok.sum()
+        assert rss == pytest.approx(float(np.sum(r**2)), rel=1e-9)
+
+
+@pytest.mark.parametrize("centre_s,search_s", [(0.0, 1.0), (0.4, 0.5)])
+def test_rough_windows_find_the_full_grids_offset(centre_s, search_s, monkeypatch):
+    """A long session's grid is scored coarsely on a few windows (_rough_spans) and finely on
+    every frame about their best: the offset and SD are those of the grid scored on every
+    frame (here windows of 6 s, four of them, over a 60-second session)."""
+    from armtrack_cli.fuse import imu_sync
+
+    p = case(0.3, task="circle", seed=3, duration=60.0)
+    monkeypatch.setattr(imu_sync, "ROUGH_MIN_S", np.inf)
+    full = estimate_imu_offset(p, centre_s=centre_s, search_s=search_s)
+    monkeypatch.setattr(imu_sync, "ROUGH_MIN_S", 30.0)
+    monkeypatch.setattr(imu_sync, "ROUGH_WINDOWS", 4)
+    monkeypatch.setattr(imu_sync, "ROUGH_WINDOW_S", 6.0)
+    pre = imu_sync._prepare(p, centre_s)
+    assert len(imu_sync._rough_spans(p, pre)) == 4
+    rough = estimate_imu_offset(p, centre_s=centre_s, search_s=search_s)
+    assert abs(rough.estimate_s - full.estimate_s) < 1e-9 and abs(rough.estimate_s - 0.3) < 0.01
+    assert rough.sd_s == pytest.approx(full.sd_s, rel=1e-6) and rough.frames == full.frames

@@ -11,7 +11,7 @@ import pytest
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.fuse import arm_smoother, imu_fold, models, rest
+from armtrack_cli.fuse import arm_smoother, imu_fold, models, rest, smoother_blocks
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
 from armtrack_cli.fuse.smoother_kernel import smooth
@@ -24,15 +24,18 @@ def _random_problem(rng, n=700, d=6):
     return x0, P0, (F, b, Q, Hc, zc, use_c, Hk, zk, use_k)
 
 
-def _blocked(x0, P0, arrays, rc, rk, gate, block):
+def _blocked(x0, P0, arrays, rc, rk, gate, block, store_mb=smoother_blocks.STORE_MB):
     n, d = arrays[0].shape[0], x0.size
     xs, Ps = np.full((n, d), np.nan), np.full((n, d, d), np.nan)
 
     def keep(lo, hi, x, P):
         xs[lo:hi], Ps[lo:hi] = x, P
 
-    gated = smooth_blocked(x0, P0, lambda lo, hi: tuple(a[lo:hi] for a in arrays), n, rc=rc,
-                           rk=rk, gate=gate, keep=keep, block=block)
+    def model(lo, hi, steps_only=False):
+        return tuple(a[lo:hi] for a in (arrays[:3] if steps_only else arrays))
+
+    gated = smooth_blocked(x0, P0, model, n, rc=rc,
+                           rk=rk, gate=gate, keep=keep, block=block, store_mb=store_mb)
     return xs, Ps, gated
 
 
@@ -41,11 +44,17 @@ def _plain(x0, P0, arrays, rc, rk, gate):
     return smooth(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate)
 
 
+# the store: every block's filtered states (the default at this size), none (each block
+# filtered again from its checkpoint), and about 250 of the 700 rows (the latest blocks kept)
+STORES = [smoother_blocks.STORE_MB, 0.0, 250 * 8 * (6 + 21) / 2**20]
+
+
+@pytest.mark.parametrize("store_mb", STORES)
 @pytest.mark.parametrize("block", [1, 64, 100, 700, 5000])
-def test_blocks_equal_the_plain_pass_on_a_random_model(block):
+def test_blocks_equal_the_plain_pass_on_a_random_model(block, store_mb):
     x0, P0, arrays = _random_problem(np.random.default_rng(3))
     xs, Ps, gated = _plain(x0, P0, arrays, 0.3, 0.2, 9.0)
-    xb, Pb, gb = _blocked(x0, P0, arrays, 0.3, 0.2, 9.0, block)
+    xb, Pb, gb = _blocked(x0, P0, arrays, 0.3, 0.2, 9.0, block, store_mb)
     assert gated.sum() > 10 and np.array_equal(gb, gated)
     assert np.abs(xb - xs).max() < 1e-9 and np.abs(Pb - Ps).max() < 1e-9
 
@@ -132,10 +141,13 @@ def _plain_run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm):
     return X[m_pre:], still[m_pre:].sum()
 
 
-def test_rest_rows_inserted_per_block_equal_the_plain_pass(monkeypatch):
+@pytest.mark.parametrize("store_mb", STORES)
+def test_rest_rows_inserted_per_block_equal_the_plain_pass(store_mb, monkeypatch):
     """The arm smoother with the rest update (zero-velocity rows after each resting frame,
     fuse/rest.py), run block by block with blocks that end inside and at the edges of rest
-    runs, equals the plain pass over the whole session to 1e-9 m."""
+    runs, equals the plain pass over the whole session to 1e-9 m, whether the backward pass
+    takes a block's filtered states from the store (its model's steps alone) or filters it
+    again."""
     rng = np.random.default_rng(5)
     t = np.arange(0, 20, 0.01)
     moving = ((t > 4) & (t < 9)) | (t > 14)
@@ -160,7 +172,7 @@ def test_rest_rows_inserted_per_block_equal_the_plain_pass(monkeypatch):
     ref, n_rest = _plain_run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm)
     assert n_rest > 100  # resting frames, in runs that the blocks below cut
     monkeypatch.setattr(arm_smoother, "smooth_blocked",
-                        lambda *a, **k: smooth_blocked(*a, **k, block=37))
+                        lambda *a, **k: smooth_blocked(*a, **k, block=37, store_mb=store_mb))
     got = arm_smoother.run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm)
     assert got.x.shape[0] == tf.size
     assert np.abs(got.x[:, :3] - ref[:, :3]).max() < 1e-9

@@ -303,9 +303,13 @@ def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use
     while iterations < s.smoother_iterations and not converged(step, previous):
         Xn = np.empty_like(X)
 
-        def model(lo: int, hi: int, X=X) -> tuple:  # the steps and rows of frames lo … hi − 1
+        def model(lo: int, hi: int, X=X, steps_only: bool = False) -> tuple:
+            """The steps and rows of frames lo … hi − 1 (the steps alone: steps_only)."""
             F, b, Q = process(_rows(fd, lo, hi), s, shoulder, period,
                               None if track is None else _rows(track, lo, hi), camera)
+            if steps_only:
+                ins = rest.steps_with_rows(still[lo:hi], F, b, Q)
+                return ins.arrays if not still[lo:hi].any() else (*ins.arrays, ins.real)
             Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed,
                                        camera)
             arrays = (F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi])

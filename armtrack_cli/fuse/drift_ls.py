@@ -46,39 +46,79 @@ def _columns(rows: SplineRows) -> np.ndarray:
             + np.arange(3)[None, None, :])
 
 
+def _segments(start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The runs of equal ``start`` (non-decreasing: frames in time order): each run's first
+    row and its start. A run's rows share their K basis functions, so a product's sum over
+    frames is a sum over runs of their rows' sums (np.add.reduceat), ~m runs for n rows."""
+    first = np.r_[0, np.flatnonzero(np.diff(start)) + 1]
+    return first, start[first]
+
+
 def normal_parts(D: Drift, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
     """DᵀD in upper banded form ((3K, 3m): scipy.linalg.cholesky_banded's), Dᵀy and yᵀy over
     D's frames (y (n_used, 2) at them): each a sum over frames, so the frames' sets can be
-    updated by adding and subtracting (imu_sync.cost's grid moves a few frames at a time)."""
+    updated by adding and subtracting (imu_sync.cost's grid moves a few frames at a time).
+    DᵀD = Σ_k (b_k b_kᵀ) ⊗ (J_kᵀ J_k), b_k the row's K weights: summed over each run of
+    frames on the same basis functions (_segments), then placed in the band."""
     K, n_cols = D.rows.w.shape[1], D.n_cols
     U = 3 * K - 1  # bandwidth above the diagonal
-    ab = np.zeros((U + 1, n_cols))
+    ab = np.zeros((U + 1) * n_cols)
+    dd, ee, aa, bb = (x.ravel() for x in np.meshgrid(np.arange(K), np.arange(K), np.arange(3),
+                                                     np.arange(3), indexing="ij"))
+    upper = 3 * dd + aa <= 3 * ee + bb  # (d, a) row, (e, b) column: the band's upper half
+    dd, ee, aa, bb = dd[upper], ee[upper], aa[upper], bb[upper]
     for rows, J, _ in D.chunks():
-        c0 = 3 * int(rows.start.min())  # the chunk's columns: c0 … c0 + w − 1
-        col = _columns(rows) - c0
-        w = int(col.max()) + 1
+        first, s = _segments(rows.start)
         M = np.einsum("kia,kib->kab", J, J)  # J_kᵀ J_k
-        part = np.zeros((U + 1) * w)
-        for d in range(K):  # one (d, e, a, b) term at a time: memory of one chunk's column
-            for e in range(d, K):
-                ww = rows.w[:, d] * rows.w[:, e]
-                for a in range(3):
-                    for b in range(3) if d < e else range(a, 3):
-                        part += np.bincount((U + col[:, d, a] - col[:, e, b]) * w
-                                            + col[:, e, b], ww * M[:, a, b], minlength=part.size)
-        ab[:, c0:c0 + w] += part.reshape(U + 1, w)
-    return ab, D.t(y), float(np.sum(y * y))
+        ww = rows.w[:, :, None] * rows.w[:, None, :]  # (k, K, K)
+        part = np.add.reduceat((ww[:, :, :, None, None] * M[:, None, None]).reshape(
+            rows.w.shape[0], -1)[:, np.flatnonzero(upper)], first, axis=0)  # (runs, terms)
+        i = 3 * (s[:, None] + dd) + aa  # row and column of each term in DᵀD
+        j = 3 * (s[:, None] + ee) + bb
+        ab += np.bincount(((U + i - j) * n_cols + j).ravel(), part.ravel(), minlength=ab.size)
+    return ab.reshape(U + 1, n_cols), D.t(y), float(np.sum(y * y))
 
 
 def banded_solver(ab: np.ndarray):
     """G⁻¹ for G + RIDGE·I, G = DᵀD in upper banded form, by its Cholesky factor: a function
-    of the right-hand side."""
-    from scipy.linalg import cho_solve_banded, cholesky_banded
+    of the right-hand side (r (N,) or (N, c)). With b = U + 1 the band's width, G is block
+    tridiagonal in b × b blocks (diagonal D_i, above it C_i); its factor L Lᵀ has diagonal
+    blocks L_i = chol(D_i − M_{i−1} M_{i−1}ᵀ) and below them M_i = C_iᵀ L_i⁻ᵀ (Golub & Van
+    Loan, Matrix Computations, 4th ed., §4.5.4), each a dense b × b step in numpy: no
+    scipy.linalg to import (half a second, issue 15), N / b steps."""
+    U = ab.shape[0] - 1
+    b, N = U + 1, ab.shape[1]
+    nb = -(-N // b)
+    Dg, Cg = np.zeros((nb, b, b)), np.zeros((max(nb - 1, 0), b, b))
+    Dg[:, np.arange(b), np.arange(b)] = 1.0  # the padding's rows beyond N: decoupled, unit
+    for o in range(U + 1):  # the o-th diagonal above the main one: G[j − o, j]
+        j = np.arange(o, N)
+        i, v = j - o, ab[U - o, o:]
+        same = i // b == j // b
+        Dg[i[same] // b, i[same] % b, j[same] % b] = v[same]
+        Dg[i[same] // b, j[same] % b, i[same] % b] = v[same]
+        Cg[i[~same] // b, i[~same] % b, j[~same] % b] = v[~same]
+    Dg[:, np.arange(b), np.arange(b)] += RIDGE
+    Li, M = np.empty_like(Dg), np.empty_like(Cg)  # L_k⁻¹ and M_k
+    for k in range(nb):
+        S = Dg[k] - M[k - 1] @ M[k - 1].T if k else Dg[k]
+        Li[k] = np.linalg.inv(np.linalg.cholesky(S))
+        if k < nb - 1:
+            M[k] = (Li[k] @ Cg[k]).T  # C_kᵀ L_k⁻ᵀ
+    LiT, MT = Li.transpose(0, 2, 1).copy(), M.transpose(0, 2, 1).copy()
 
-    ab = ab.copy()
-    ab[-1] += RIDGE
-    factor = cholesky_banded(ab, lower=False)
-    return lambda rhs: cho_solve_banded((factor, False), rhs)
+    def solve(rhs: np.ndarray) -> np.ndarray:
+        y = np.zeros((nb, b) + rhs.shape[1:])
+        y.reshape((nb * b,) + rhs.shape[1:])[:N] = rhs
+        for k in range(nb):  # L y = r
+            y[k] = Li[k] @ (y[k] - M[k - 1] @ y[k - 1] if k else y[k])
+        for k in range(nb - 2, -1, -1) if nb > 1 else ():  # Lᵀ x = y
+            y[k + 1] = LiT[k + 1] @ y[k + 1]
+            y[k] -= MT[k] @ y[k + 1]
+        y[0] = LiT[0] @ y[0]
+        return y.reshape((nb * b,) + rhs.shape[1:])[:N].copy()
+
+    return solve
 
 
 class Drift:
@@ -108,16 +148,19 @@ class Drift:
         return int(touched.sum())
 
     def t(self, r: np.ndarray) -> np.ndarray:
-        """Dᵀ r for r (n_used, 2) or (n_used, 2, c): (3m,) or (3m, c)."""
+        """Dᵀ r for r (n_used, 2) or (n_used, 2, c): (3m,) or (3m, c); each frame's
+        b_k ⊗ J_kᵀ r_k summed over the runs of frames on the same basis functions."""
         r3 = r[:, :, None] if r.ndim == 2 else r
-        out = np.zeros((r3.shape[2], self.n_cols))
+        K = self.rows.w.shape[1]
+        out = np.zeros((self.rows.m, 3, r3.shape[2]))  # row 3j + a: basis j, axis a
         for rows, J, s in self.chunks():
-            col = _columns(rows).ravel()
-            g = np.einsum("kia,kic->cka", J, r3[s])  # J_kᵀ r_k per column c
-            for c in range(r3.shape[2]):
-                vals = rows.w[:, :, None] * g[c][:, None, :]
-                out[c] += np.bincount(col, vals.ravel(), minlength=self.n_cols)
-        return out[0] if r.ndim == 2 else out.T
+            first, start = _segments(rows.start)
+            g = np.einsum("kia,kic->kac", J, r3[s])  # J_kᵀ r_k, (k, 3, c)
+            part = np.add.reduceat(rows.w[:, :, None, None] * g[:, None], first, axis=0)
+            for d in range(K):  # the runs' starts differ: no index twice in one d
+                out[start + d] += part[:, d]
+        out = out.reshape(self.n_cols, -1)
+        return out[:, 0] if r.ndim == 2 else out
 
     def times(self, theta: np.ndarray) -> np.ndarray:
         """D θ: (n_used, 2)."""

@@ -19,8 +19,12 @@ J_k is taken where the detection's ray meets the
 arm's sphere (eq. 15, the IMU's orientation at t_k − δ). Cost: the fit's mean squared
 residual over the frames both cover. A grid at one frame period over the search window (scored
 every COARSE periods, then at every period about the best of those) finds
-the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames.
-SD: from the curvature of the residual sum of squares (profiled over c and d), inflated by
+the basin; a bounded scalar search over ± REFINE_FRAMES periods refines it on fixed frames,
+stopping within XATOL_S. A session of ROUGH_MIN_S or more has the grid's coarse pass scored on
+ROUGH_WINDOWS windows spread over it (two minutes in all: the basin is as clear there), the
+fine pass and the refinement on every frame.
+SD: from the curvature of the residual sum of squares (profiled over c and d; the three sums
+from the cost's normal equations, one factorisation), inflated by
 (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ (compare/sync.py does the same).
 The drift's columns have K = DRIFT_DEGREE + 1 non-zeros per frame and axis, so the fits are
 banded least squares (fuse/drift_ls.py), linear in the session's length in time. Memory: the
@@ -38,6 +42,7 @@ gives no IMU velocity. Measured in docs/validation-sync.md.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -67,6 +72,11 @@ MIN_OVERLAP = 0.5  # share of the frames with an image acceleration that must be
 MIN_FRAMES = 30
 COARSE = 3  # the grid is scored every COARSE frame periods, then finely about the best
 REFINE_FRAMES = 3  # the refinement searches the grid's best ± this many frame periods
+XATOL_S = 1e-4  # … and stops with δ within this (Brent's xatol): a fifth of the smallest SD
+#                 seen (0.56 ms, the 10-minute bench session); 1e-5 took four more costs
+ROUGH_MIN_S = 240.0  # a session this long has the grid's coarse pass scored on
+ROUGH_WINDOWS = 8  # … this many windows
+ROUGH_WINDOW_S = 15.0  # … of this length, evenly spread (2 minutes in all)
 REPREPARE = 3  # at most this many refinements, each with the depths and bias columns at its δ
 
 
@@ -90,10 +100,16 @@ class SyncProblem:
     arm: models.Arm | None
 
 
+@lru_cache(maxsize=8)
+def _coeffs(window: int, deriv: int, dt: float) -> np.ndarray:
+    """savgol_coeffs, once per (window, deriv, dt): every δ's columns use the same (read only)."""
+    return savgol_coeffs(window, deriv, dt)
+
+
 def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
     """Cubic Savitzky–Golay along axis 0 (odd ``window``); NaN wherever the window holds a NaN
     or runs off either end."""
-    c = savgol_coeffs(window, deriv, dt)
+    c = _coeffs(window, deriv, dt)
     h = window // 2
     out = np.full(x.shape, np.nan)
     if x.shape[0] < window:
@@ -134,19 +150,6 @@ def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Pr
                      v_imu, dt, window)
 
 
-def _bias_columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice) -> np.ndarray:
-    """(k, 2, 3) px/s per m/s² at the frames ``sl``: the image velocity J_k ∫R_WB β dt per unit
-    accelerometer bias β in B at t_k − δ (eq. 4: a bias in B turns with the forearm, so its
-    velocity error is not a smooth drift), smoothed as the image side is."""
-    t = np.clip(p.t_frames[sl] - delta, p.t_imu[0], p.t_imu[-1])
-    lo, hi = np.searchsorted(p.t_imu, [t[0], t[-1]])  # the samples these frames fall between
-    s = slice(max(lo - 1, 0), hi + 1)
-    at = np.stack([np.interp(t, p.t_imu[s], pre.rint[s, i, j]) for i in range(3)
-                   for j in range(3)], -1).reshape(-1, 3, 3)
-    cols = np.einsum("kij,kja->kia", pre.J[sl], at)
-    return _savgol(cols.reshape(-1, 6), pre.window, 0, pre.dt).reshape(-1, 2, 3)
-
-
 def _bridge(x: np.ndarray, most: int) -> np.ndarray:
     """x (n, d) with runs of at most ``most`` missing rows between two present ones filled
     linearly (for the derivative only: a lost frame or two must not void a whole window);
@@ -177,39 +180,65 @@ def _spline_basis(t: np.ndarray) -> SplineRows:
     return SplineRows(start, w, knots.size - k - 1)
 
 
-def predicted(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None)
-              ) -> np.ndarray:
-    """V(δ) (k, 2) px/s at the frames ``sl``: the IMU's integrated velocity at t_k − δ (smooth
-    in δ; NaN outside the recording or across a gap longer than GAP_S) projected by J_k (eq.
-    7's Jacobian: u̇ = J v exactly), smoothed as the image side is."""
-    t = p.t_frames[sl] - delta
+def _imu_covers(p: SyncProblem, t: np.ndarray) -> np.ndarray:
+    """(k,) bool: IMU times t inside the recording and not across a gap longer than GAP_S."""
     j = np.clip(np.searchsorted(p.t_imu, t, side="right"), 1, p.t_imu.size - 1)
-    t0, t1 = p.t_imu[j - 1], p.t_imu[j]
+    return (t >= p.t_imu[0]) & (t <= p.t_imu[-1]) & (p.t_imu[j] - p.t_imu[j - 1] <= GAP_S)
+
+
+def _lerp(t: np.ndarray, y: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """y (M, …) linearly interpolated at x (k,) inside [t[0], t[-1]] (np.interp's formula, on
+    every column at once)."""
+    j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, t.size - 2)
+    f = ((x - t[j]) / (t[j + 1] - t[j])).reshape((-1,) + (1,) * (y.ndim - 1))
+    return y[j] + f * (y[j + 1] - y[j])
+
+
+def columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None)
+            ) -> np.ndarray:
+    """W(δ) (k, 2, 4) px/s at the frames ``sl``, smoothed as the image side is: V(δ) = J_k
+    v(t_k − δ), the IMU's integrated velocity at t_k − δ (smooth in δ; NaN outside the
+    recording or across a gap longer than GAP_S) projected by J_k (eq. 7's Jacobian: u̇ = J v
+    exactly); and J_k ∫R_WB dt per unit accelerometer bias β in B at t_k − δ (eq. 4: a bias
+    in B turns with the forearm, so its velocity error is not a smooth drift)."""
+    t = p.t_frames[sl] - delta
     v = hermite(p.t_imu, pre.v_imu, p.a_W, t)
-    v[(t < p.t_imu[0]) | (t > p.t_imu[-1]) | (t1 - t0 > GAP_S)] = np.nan
-    return _savgol(np.einsum("kij,kj->ki", pre.J[sl], v), pre.window, 0, pre.dt)
+    v[~_imu_covers(p, t)] = np.nan
+    at = _lerp(p.t_imu, pre.rint, np.clip(t, p.t_imu[0], p.t_imu[-1]))  # (k, 3, 3)
+    W = pre.J[sl] @ np.concatenate([v[:, :, None], at], axis=2)  # (k, 2, 4)
+    return _savgol(W.reshape(-1, 8), pre.window, 0, pre.dt).reshape(-1, 2, 4)
 
 
-def _chunks(p: SyncProblem, pre: _Prepared, delta: float):
-    """(a, b, W, usable) for CHUNK frames a … b − 1 at a time: W (b − a, 2, 4) the IMU's
-    columns at δ, V(δ) and the bias's three, and the frames scorable. Each chunk is formed with
-    the smoothing's half window either side, so its values are the whole session's: memory
-    bounded however long the session (issue 15)."""
+def _chunks(p: SyncProblem, pre: _Prepared, delta: float, spans=None):
+    """(a, b, W, usable) for CHUNK frames a … b − 1 at a time (or for each (a, b) of ``spans``):
+    W (b − a, 2, 4) the IMU's columns at δ, V(δ) and the bias's three, and the frames
+    scorable. Each chunk is formed with the smoothing's half window either side, so its values
+    are the whole session's: memory bounded however long the session (issue 15)."""
     n, h = p.t_frames.size, pre.window // 2
-    for a in range(0, n, CHUNK):
-        b = min(a + CHUNK, n)
+    for a, b in spans or ((a, min(a + CHUNK, n)) for a in range(0, n, CHUNK)):
         sl = slice(max(a - h, 0), min(b + h, n))
-        W = np.concatenate([predicted(p, pre, delta, sl)[:, :, None],
-                            _bias_columns(p, pre, delta, sl)], axis=2)[a - sl.start:b - sl.start]
+        W = columns(p, pre, delta, sl)[a - sl.start:b - sl.start]
         yield a, b, W, np.isfinite(W).all(axis=(1, 2)) & np.isfinite(pre.vel_img[a:b]).all(axis=1)
 
 
+def _rough_spans(p: SyncProblem, pre: _Prepared) -> list[tuple[int, int]] | None:
+    """ROUGH_WINDOWS windows of ROUGH_WINDOW_S, evenly spread over the session, for the
+    grid's coarse pass (which only picks the basin; the fine pass and the refinement score
+    every frame); None for a session shorter than ROUGH_MIN_S (all of it is scored)."""
+    n = p.t_frames.size
+    if p.t_frames[-1] - p.t_frames[0] < ROUGH_MIN_S:
+        return None
+    w = int(round(ROUGH_WINDOW_S / pre.dt))
+    return [(int(a), int(a) + w) for a in np.linspace(0, n - w, ROUGH_WINDOWS)]
+
+
 def _usable(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
-    """(n,) bool: the frames scorable at δ."""
-    ok = np.zeros(p.t_frames.size, bool)
-    for a, b, _, usable in _chunks(p, pre, delta):
-        ok[a:b] = usable
-    return ok
+    """(n,) bool: the frames scorable at δ (_chunks' ``usable``) without forming the columns:
+    a detection's velocity, and the IMU covering every frame of the smoothing's window (the
+    bias's columns are finite wherever J is: their times are clipped to the recording)."""
+    gap = np.where(_imu_covers(p, p.t_frames - delta), 0.0, np.nan)[:, None]
+    covered = np.isfinite(_savgol(gap, pre.window, 0, pre.dt))[:, 0]
+    return covered & np.isfinite(pre.vel_img).all(axis=1) & np.isfinite(pre.J).all(axis=(1, 2))
 
 
 def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray):
@@ -222,16 +251,17 @@ def _fit(p: SyncProblem, pre: _Prepared, delta: float, ok: np.ndarray):
 
 
 def cost(delta: float, p: SyncProblem, pre: _Prepared, n_img: int, cache: dict,
-         frames: np.ndarray | None = None) -> float:
+         frames: np.ndarray | None = None, spans=None) -> float:
     """Mean squared residual of the fit (_fit); inf with too little overlap. The drift's
     normal equations are reused while the frames used stay the same (``cache``): with
     G = DᵀD (banded, factored once), the residual sum is yᵀy − (Dᵀy)ᵀG⁻¹Dᵀy − bᵀS⁻¹b, where
     S = WᵀW − (DᵀW)ᵀG⁻¹DᵀW and b = Wᵀy − (DᵀW)ᵀG⁻¹Dᵀy, W the four columns that move with δ
     (the scale's and the bias's) eliminated last; a negative scale (c > 0: a range) leaves
-    the bias's three alone."""
+    the bias's three alone. With ``spans`` ((a, b) ranges of frames), over those alone
+    (n_img then counts their frames with an image velocity)."""
     ok = np.zeros(p.t_frames.size, bool)
     WW, Wy, DW = np.zeros((4, 4)), np.zeros(4), np.zeros((3 * pre.drift.m, 4))
-    for a, b, W, use in _chunks(p, pre, delta):  # WᵀW, Wᵀy and DᵀW a chunk at a time
+    for a, b, W, use in _chunks(p, pre, delta, spans):  # WᵀW, Wᵀy and DᵀW a chunk at a time
         if frames is not None:  # the same frames at every δ (a refinement's), when all usable
             if not use[frames[a:b]].all():
                 return np.inf
@@ -307,11 +337,18 @@ def estimate_imu_offset(p: SyncProblem, *, centre_s: float = 0.0, search_s: floa
 
 
 def _grid_costs(grid: np.ndarray, p: SyncProblem, pre: _Prepared, n_img: int) -> np.ndarray:
-    """The cost at every COARSE-th δ of the grid, then at each δ within COARSE − 1 of the
-    best of those (coarse to fine: the basin is many frames wide); inf where not evaluated."""
+    """The cost at every COARSE-th δ of the grid (on _rough_spans' windows of a long session),
+    then at each δ within COARSE − 1 of the best of those (coarse to fine: the basin is many
+    frames wide); inf where not evaluated."""
     cache: dict = {}  # the grid's normal equations: the refinements keep their own
+    spans, rough = _rough_spans(p, pre), None
+    if spans is not None:
+        n_rough = sum(int(np.isfinite(pre.vel_img[a:b]).all(axis=1).sum()) for a, b in spans)
+        cache_r: dict = {}
+        def rough(i):  # noqa: E306
+            return cost(grid[i], p, pre, n_rough, cache_r, spans=spans)
     return coarse_to_fine(grid.size, lambda i: cost(grid[i], p, pre, n_img, cache),
-                          every=COARSE, radius=COARSE - 1, with_last=True)
+                          every=COARSE, radius=COARSE - 1, with_last=True, rough=rough)
 
 
 def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
@@ -323,7 +360,7 @@ def _refine(p: SyncProblem, pre: _Prepared, n_img: int, d0: float, step: float
     cache: dict = {}
     c0 = cost(d0, p, pre, n_img, cache, frames)
     x, fun = bounded_min(lambda d: cost(d, p, pre, n_img, cache, frames), lo, hi,
-                         xatol=1e-5)  # scipy's bounded minimize_scalar, step for step
+                         xatol=XATOL_S)  # scipy's bounded minimize_scalar, step for step
     return (float(x), float(fun)) if fun <= c0 else (d0, c0)
 
 
@@ -333,10 +370,10 @@ def _sd(p: SyncProblem, pre: _Prepared, delta: float) -> tuple[float, int]:
     (1 + ρ)/(1 − ρ) for the residuals' lag-1 autocorrelation ρ; and the frames used."""
     h = 0.5 * pre.dt
     ok = _usable(p, pre, delta) & _usable(p, pre, delta + h) & _usable(p, pre, delta - h)
-    fits = [_fit(p, pre, d, ok) for d in (delta - h, delta, delta + h)]  # three fits
-    rss = [float(np.sum(r**2)) for r, _ in fits]
+    cache: dict = {}  # the drift's normal equations on these frames, factored once
+    rss = [cost(d, p, pre, 0, cache, ok) * ok.sum() for d in (delta - h, delta, delta + h)]
+    r, n_par = _fit(p, pre, delta, ok)  # the residuals themselves, for ρ
     curv = (rss[0] - 2 * rss[1] + rss[2]) / h**2
-    r, n_par = fits[1]
     sigma2 = rss[1] / max(r.size - n_par, 1)
     rho = float(np.mean([np.corrcoef(r[:-1, k], r[1:, k])[0, 1] for k in range(2)]))
     rho = min(max(rho, 0.0), 0.99)

@@ -84,9 +84,12 @@ def rest_frames(t_imu: np.ndarray, f_B: np.ndarray, w_B: np.ndarray, t_frames: n
     tv, zv = t_frames[video_from:], z[video_from:]
     seen = np.isfinite(zv).all(axis=1)
     on_video = rest[video_from:] & _window_all(tv, seen, tv, half)
-    for k in np.flatnonzero(on_video):
-        near = np.abs(tv - tv[k]) <= half
-        on_video[k] = bool((np.ptp(zv[near], axis=0) < test.px).all())
+    cand = np.flatnonzero(on_video)  # the frames within ±half of each: a run (tv is sorted),
+    lo = np.searchsorted(tv, tv[cand] - 2 * half, side="left")  # found inside a wider one
+    hi = np.searchsorted(tv, tv[cand] + 2 * half, side="right")  # (linear in the session,
+    for k, a, b in zip(cand, lo, hi):  # where the whole session at every frame was quadratic)
+        near = np.abs(tv[a:b] - tv[k]) <= half
+        on_video[k] = bool((np.ptp(zv[a:b][near], axis=0) < test.px).all())
     rest[video_from:] = on_video
     return rest
 
@@ -99,23 +102,38 @@ class Inserted:
     real: np.ndarray  # (n + 3 m,) bool
 
 
+def _layout(rest: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each row's frame, its place after it (0 the frame's own, 1–3 its zero-velocity rows)
+    and whether it is one of those."""
+    reps = 1 + 3 * rest.astype(int)
+    idx = np.repeat(np.arange(rest.size), reps)
+    pos = np.arange(idx.size) - np.repeat(np.cumsum(reps) - reps, reps)  # 0 real, 1-3 virtual
+    return idx, pos, pos > 0
+
+
+def steps_with_rows(rest: np.ndarray, F, b, Q) -> Inserted:
+    """with_rows' steps alone (F, b, Q): the inserted ones of zero length (F = I, b = 0, Q = 0),
+    for a pass that needs no measurement rows (the smoother's backward, smoother_blocks.py)."""
+    if not rest.any():
+        return Inserted((F, b, Q), np.ones(rest.size, bool))
+    idx, _, virt = _layout(rest)
+    F2, b2, Q2 = F[idx], b[idx], Q[idx]
+    F2[virt], b2[virt], Q2[virt] = np.eye(F.shape[1]), 0.0, 0.0
+    return Inserted((F2, b2, Q2), ~virt)
+
+
 def with_rows(rest: np.ndarray, sd_m_s: float, rk: float, F, b, Q, Hc, zc, use_c, Hk, zk,
               use_k) -> Inserted:
     """The kernel's arrays (frames first) with three zero-length steps after each rest frame,
     carrying v_x, v_y, v_z = 0 ± sd_m_s. The kernel's scalar rows all have variance rk, so
     each row is scaled by √rk / sd_m_s (a row h, z with variance σ² is h c, z c with c² σ²)."""
-    n, d = F.shape[0], F.shape[1]
+    steps = steps_with_rows(rest, F, b, Q)
     if not rest.any():  # nothing to insert: the arrays themselves, no copies
-        return Inserted((F, b, Q, Hc, zc, use_c, Hk, zk, use_k), np.ones(n, bool))
-    reps = 1 + 3 * rest.astype(int)
-    idx = np.repeat(np.arange(n), reps)
-    pos = np.arange(idx.size) - np.repeat(np.cumsum(reps) - reps, reps)  # 0 real, 1-3 virtual
-    virt = pos > 0
-    F2, b2, Q2 = F[idx], b[idx], Q[idx]
-    F2[virt], b2[virt], Q2[virt] = np.eye(d), 0.0, 0.0
+        return Inserted((*steps.arrays, Hc, zc, use_c, Hk, zk, use_k), steps.real)
+    idx, pos, virt = _layout(rest)
     Hk2, zk2 = Hk[idx], zk[idx]
     Hk2[virt] = 0.0
     Hk2[virt, V_.start + pos[virt] - 1] = np.sqrt(rk) / sd_m_s
     zk2[virt] = 0.0
-    arrays = (F2, b2, Q2, Hc[idx], zc[idx], use_c[idx] & ~virt, Hk2, zk2, use_k[idx] | virt)
+    arrays = (*steps.arrays, Hc[idx], zc[idx], use_c[idx] & ~virt, Hk2, zk2, use_k[idx] | virt)
     return Inserted(arrays, ~virt)

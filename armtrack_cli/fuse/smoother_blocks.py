@@ -1,17 +1,23 @@
 """The linearised smoother's pass (fuse/smoother_kernel.py) with memory flat in the session's
-length: a checkpointed Rauch–Tung–Striebel smoother.
+length: a checkpointed Rauch–Tung–Striebel smoother with a bounded store.
 
 The plain pass keeps every frame's filtered covariance (n × d × d: 32 MB for a 10-minute session
 at d = 15, and the model's F and Q as much again each) for the backward pass. Here the model is
-built a block of frames at a time (``model``), the forward filter keeps only the state entering
-each block (a checkpoint), and the backward pass, block by block from the last, runs the
-filter again over the block from its checkpoint and smooths it from the next block's first
-smoothed state. The second forward run repeats the first's arithmetic exactly, so the result
-equals the plain pass (tests/test_smoother_blocks.py); it costs one more forward filter.
+built a block of frames at a time (``model``), the forward filter keeps the state entering
+each block (a checkpoint) and the filtered states of the latest blocks that fit in STORE_MB
+(each covariance by its upper triangle: it is symmetric to the bit, _symmetrise), and the
+backward pass, block by block from the last, smooths each block from the next block's first
+smoothed state: from the store where it holds the block, else after running the filter again
+over it from its checkpoint (the same arithmetic as the first run, so the result equals the
+plain pass either way: tests/test_smoother_blocks.py). The store holds about 7,700 rows at
+d = 15 (a third of a 10-minute session's; a larger one raised fuse's peak, the measures' after
+the smoother, by as much): the filter runs again only over the blocks before those, and the
+memory stays the store's however long the session.
 """
 
 from __future__ import annotations
 
+import mmap
 from collections.abc import Callable
 
 import numpy as np
@@ -19,19 +25,22 @@ import numpy as np
 from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
 
 BLOCK = 1024  # frames per block: ~2 MB of covariances at d = 15
+STORE_MB = 8  # the filtered states kept for the backward pass, at most (a third of a
+#              10-minute session's: more would raise fuse's peak, measures' at the end)
 
 # model(lo, hi) -> (F, b, Q, Hc, zc, use_c, Hk, zk, use_k) for frames lo … hi − 1 (row j is
 # frame lo + j; F[j], b[j], Q[j] the step into it; row 0 of the session's first block unused);
 # or those and ``real`` (rows,) bool when the model inserts rows of its own after a frame (the
 # rest update's zero-velocity rows, fuse/rest.py): a block's first row is always its first
-# frame's, and only the real rows are the frames
+# frame's, and only the real rows are the frames; model(lo, hi, steps_only=True): (F, b, Q)
+# alone (and ``real``), all that the backward pass needs of a block the store kept
 Model = Callable[[int, int], tuple]
 
 
 def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: float,
                    rk: float, gate: float,
                    keep: Callable[[int, int, np.ndarray, np.ndarray], None],
-                   block: int = BLOCK) -> np.ndarray:
+                   block: int = BLOCK, store_mb: float = STORE_MB) -> np.ndarray:
     """Smooth frames 0 … n − 1 from the prior (x0, P0); ``keep(lo, hi, xs, Ps)`` receives
     the smoothed means (hi − lo, d) and covariances (hi − lo, d, d) of frames lo … hi − 1,
     from the last block back to the first (the arrays are reused: copy what is kept).
@@ -40,24 +49,31 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
     starts = list(range(0, n, block))
     check_x = np.empty((len(starts), d))
     check_P = np.empty((len(starts), d, d))
-    buf = _Rows(d)
+    buf, store = _Rows(d), _Store(d, store_mb)
     gated = np.zeros(n, bool)
     x, P = np.asarray(x0, float), np.asarray(P0, float)
-    for i, lo in enumerate(starts):  # forward: the checkpoints and the gate's decisions
+    for i, lo in enumerate(starts):  # forward: checkpoints, the gate's decisions, the store
         hi = min(lo + block, n)
         check_x[i], check_P[i] = x, P
-        m, real = _split(model(lo, hi))
-        xf, Pf, g = buf.take(m[0].shape[0])
-        x, P = _filter(x, P, m, rc, rk, gate, lo == 0, m[0].shape[0], xf, Pf, g)
-        gated[lo:hi] = g[:m[0].shape[0]] if real is None else g[:real.size][real]
+        m, real = _split(model(lo, hi), 9)
+        rows = m[0].shape[0]
+        xf, Pf, g = buf.take(rows)
+        x, P = _filter(x, P, m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
+        gated[lo:hi] = g[:rows] if real is None else g[:real.size][real]
+        store.put(i, xf[:rows], Pf[:rows])
     xs_next, Ps_next = np.zeros(d), np.zeros((d, d))
     for i in range(len(starts) - 1, -1, -1):  # backward, a block at a time
         lo = starts[i]
         hi = min(lo + block, n)
-        m, real = _split(model(lo, min(hi + 1, n)))  # and the step into the next frame
+        kept = i in store.blocks  # else filtered again from the checkpoint
+        m, real = _split(model(lo, min(hi + 1, n), steps_only=kept),  # and the step into
+                         3 if kept else 9)  # the next frame
         rows = _rows_of(real, hi - lo, m[0].shape[0], hi == n)
         xf, Pf, g = buf.take(m[0].shape[0])
-        _filter(check_x[i], check_P[i], m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
+        if kept:
+            store.take(i, xf, Pf)
+        else:
+            _filter(check_x[i], check_P[i], m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
         F, b, Q = m[:3]
         rts_block(xf, Pf, rows, F, b, Q, xs_next, Ps_next, hi == n)
         if real is None:
@@ -68,9 +84,51 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
     return gated
 
 
-def _split(m: tuple) -> tuple[tuple, np.ndarray | None]:
-    """A model's arrays, and its ``real`` rows (None: every row a frame)."""
-    return (m[:9], m[9]) if len(m) == 10 else (m, None)
+class _Store:
+    """The filtered states (x, P's upper triangle) of the latest blocks, at most ``mb`` MB: a
+    ring of rows in two arrays (pages touched only as rows are written, all returned at once
+    when the pass ends); putting a block drops the earliest ones it would overwrite."""
+
+    def __init__(self, d: int, mb: float):
+        self.iu = np.triu_indices(d)
+        self.cap = int(mb * 2**20 / (8 * (d + self.iu[0].size)))  # rows
+        self.x, self.tri = _returned((self.cap, d)), _returned((self.cap, self.iu[0].size))
+        self.blocks: dict[int, tuple[int, int]] = {}  # block: (first row, rows), in the order put
+        self.head = self.used = 0
+
+    def put(self, i: int, xf: np.ndarray, Pf: np.ndarray) -> None:
+        k = xf.shape[0]
+        if k > self.cap:
+            return
+        while self.used + k > self.cap:  # the earliest blocks lie just after the latest
+            self.used -= self.blocks.pop(next(iter(self.blocks)))[1]
+        rows = (self.head + np.arange(k)) % self.cap
+        self.x[rows], self.tri[rows] = xf, Pf[:, self.iu[0], self.iu[1]]
+        self.blocks[i] = self.head, k
+        self.head, self.used = (self.head + k) % self.cap, self.used + k
+
+    def take(self, i: int, xf: np.ndarray, Pf: np.ndarray) -> None:
+        """Block i's states into xf, Pf (the backward pass: nothing is put after)."""
+        first, k = self.blocks.pop(i)
+        rows = (first + np.arange(k)) % self.cap
+        xf[:k] = self.x[rows]
+        tri = self.tri[rows]
+        Pf[:k, self.iu[0], self.iu[1]] = tri
+        Pf[:k, self.iu[1], self.iu[0]] = tri
+
+
+def _returned(shape: tuple[int, int]) -> np.ndarray:
+    """An array in its own anonymous mapping: its pages are the operating system's again when
+    it is freed (from malloc's heap, a freed store stayed in the process's memory)."""
+    n = shape[0] * shape[1] * 8
+    if n == 0:
+        return np.empty(shape)
+    return np.frombuffer(mmap.mmap(-1, n), dtype=np.float64).reshape(shape)
+
+
+def _split(m: tuple, size: int) -> tuple[tuple, np.ndarray | None]:
+    """A model's ``size`` arrays, and its ``real`` rows (None: every row a frame)."""
+    return (m[:size], m[size]) if len(m) == size + 1 else (m, None)
 
 
 def _rows_of(real: np.ndarray | None, frames: int, rows: int, last: bool) -> int:

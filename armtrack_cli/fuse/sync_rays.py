@@ -56,13 +56,14 @@ def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
             continue
         near, far, _ = models.ray_sphere(c, d, p.arm.sphere_centres(q), p.arm.L1)
         lower = np.where(near * d[:, 2] <= far * d[:, 2], near, far)  # nearer the table
-        for i in range(k.size):
-            if far[i] - near[i] < GRAZE_M:  # a grazing ray: which one is ambiguous; the table's
-                s = lower[i]
+        s = np.empty(k.size)
+        for i, (a, b, low) in enumerate(zip(near.tolist(), far.tolist(), lower.tolist())):
+            if b - a < GRAZE_M:  # a grazing ray: which one is ambiguous; the table's
+                prev = low
             else:
-                s = near[i] if abs(near[i] - prev) <= abs(far[i] - prev) else far[i]
-            out[k[i]] = c + s * d[i]
-            prev = s
+                prev = a if abs(a - prev) <= abs(b - prev) else b
+            s[i] = prev  # (Python floats: the chain's choice is sequential)
+        out[k] = c + s[:, None] * d
     return out
 
 
