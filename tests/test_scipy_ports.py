@@ -128,3 +128,21 @@ def test_prominences_of_a_long_signal_are_scipys():
         assert np.array_equal(peaks.prominences(x, pk), peak_prominences(x, pk)[0])
         assert np.array_equal(peaks.find_peaks(x, prominence=0.02, distance=5),
                               find_peaks(x, prominence=0.02, distance=5)[0])
+
+
+def test_gaussian_wrap_is_scipys_gaussian_filter1d():
+    """measures.uncertainty.gaussian_wrap: the posterior draws' smoothing without importing
+    scipy.ndimage, bit for bit, short signals (wrapped more than once) and long, any SD."""
+    from scipy.ndimage import gaussian_filter1d
+
+    from armtrack_cli.measures.uncertainty import gaussian_wrap
+
+    rng = np.random.default_rng(6)
+    for trial in range(200):
+        n = int(rng.integers(1, 400)) if trial else 18_000
+        sigma = float(rng.choice([0.1, 0.37, 1.0, 2.5, 15.0, 50.0, rng.uniform(0.1, 80)]))
+        x = rng.standard_normal((int(rng.integers(1, 4)), n, 3))
+        assert np.array_equal(gaussian_wrap(x, sigma, axis=1),
+                              gaussian_filter1d(x, sigma, axis=1, mode="wrap"))
+        assert np.array_equal(gaussian_wrap(x[0, :, 0], sigma, axis=0),
+                              gaussian_filter1d(x[0, :, 0], sigma, mode="wrap"))
