@@ -1,5 +1,6 @@
-"""Where fuse's resident memory goes: `python benchmarks/fuse_memory.py SESSION` runs
-pipeline.fuse(SESSION) (the default method; the session calibrated and detected) in this
+"""Where fuse's resident memory goes: `python benchmarks/fuse_memory.py SESSION [STAGE]` runs
+pipeline.fuse(SESSION) (the default method; the session calibrated and detected), or
+pipeline.STAGE(SESSION) (compare: the session fused), in this
 process while a thread samples VmRSS every 20 ms with the armtrack frames the main thread is
 in, then prints the peak (VmHWM), the rises of the timeline by phase, and the stack at the
 highest sample: what is live at the peak (issue 15; benchmarks/run.py's end-to-end rows give
@@ -37,9 +38,10 @@ def main() -> None:
     t0 = time.perf_counter()
     from armtrack_cli import pipeline
 
-    pipeline.fuse(sys.argv[1])
+    stage = sys.argv[2] if len(sys.argv) > 2 else "fuse"
+    getattr(pipeline, stage)(sys.argv[1])
     done.set()
-    print(f"fuse {sys.argv[1]}: {time.perf_counter() - t0:.1f} s, VmHWM {_status('VmHWM'):.0f} MB")
+    print(f"{stage} {sys.argv[1]}: {time.perf_counter() - t0:.1f} s, VmHWM {_status('VmHWM'):.0f} MB")
     print("   s      MB  where (a row where the phase changes or RSS moved by more than 4 MB)")
     last_key, last_mb = None, 0.0
     for t, mb, w in log:

@@ -280,3 +280,25 @@ def test_compare_imports_no_pandas_scipy_opencv_matplotlib_or_numba(sessions, tm
             "if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""
+
+
+def test_fuse_imports_no_pandas_or_matplotlib(sessions, tmp_path):
+    """The default method in a fresh process reads detect's CSV and writes its trajectory and
+    measures without pandas (session/plain_tables.py, column_csv.write_columns,
+    outputs.write_rows: the bytes pandas writes, tests/test_column_csv.py,
+    tests/test_plain_tables.py): ~30 MB less resident through the whole stage (issue 15)."""
+    import shutil
+    import subprocess
+    import sys
+
+    folder, _ = sessions["circle"]
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in ("camera.yaml", "detections.csv"):
+        shutil.copy(folder / "armtrack" / name, out / name)
+    code = ("import sys; from armtrack_cli import pipeline; "
+            f"pipeline.fuse({str(folder)!r}, out={str(out)!r}); "
+            "print(' '.join(m for m in ('pandas', 'matplotlib') if m in sys.modules))")
+    got = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert got.stdout.strip() == ""
+    assert (out / "kinematics-arm-smoother.csv").exists()

@@ -205,7 +205,16 @@ def test_repeated_reaches_are_measured_per_segment():
         assert r[("wrist_path_length", str(n))]["value"] == pytest.approx(D, rel=3e-3)
         assert r[("straightness", str(n))]["value"] == pytest.approx(1.0, abs=2e-3)
     assert r[("wrist_path_length", "session")]["value"] == pytest.approx(6 * D, rel=3e-3)
-    assert r[("time_to_peak_speed", "session")]["value"].startswith("not computable: 6 movements")
+    for m in ("time_to_peak_speed", "sparc", "ldlj"):  # one movement's measures: per segment
+        assert r[(m, "session")]["value"] == "not computable: 6 movements (see each segment)"
+        assert np.isnan(r[(m, "session")]["sd"])
+    v = speed_profile(t, np.c_[x, 0 * x, 0 * x], Settings())[2]
+    for n in range(1, 7):  # each segment's SPARC and LDLJ: smoothness.py on its own movement
+        a, b = (round(FS * r[("sparc", str(n))][k]) for k in ("t_start", "t_end"))
+        onset, offset = path.onset_offset(v[a:b + 1], Settings())
+        move = v[a:b + 1][onset:offset + 1]
+        assert r[("sparc", str(n))]["value"] == pytest.approx(smoothness.sparc(move, FS), abs=1e-9)
+        assert r[("ldlj", str(n))]["value"] == pytest.approx(smoothness.ldlj(move, FS), abs=1e-9)
 
 
 def test_posterior_draws_have_the_stated_sd_correlation_and_smoothness():

@@ -110,3 +110,39 @@ def test_winter_cutoff_and_its_filtered_copy_are_the_whole_grids(speed_hz):
     fc_ref, y_ref = _winter_whole_grid(x, 100.0, 6.0)
     assert fc == fc_ref
     assert np.abs(y - y_ref).max() < 1e-12
+
+
+def test_prominences_of_a_long_signal_are_scipys():
+    """A signal longer than the sparse tables take as it stands (a 60-minute session's speed:
+    108,000 samples) is cut down to its maxima and valleys first: the same prominences as
+    scipy's, exactly, with flat runs and ties."""
+    from scipy.signal import peak_prominences
+
+    rng = np.random.default_rng(5)
+    for trial in range(6):
+        n = int(rng.integers(peaks.TABLE_MAX + 1, 120_000))
+        t = np.arange(n) / 30.0
+        x = [np.abs(np.sin(t / rng.uniform(0.5, 3))) + 0.02 * rng.standard_normal(n),
+             np.round(2 * rng.standard_normal(n)) / 2, rng.standard_normal(n)][trial % 3]
+        pk = peaks.local_maxima(x)
+        assert np.array_equal(peaks.prominences(x, pk), peak_prominences(x, pk)[0])
+        assert np.array_equal(peaks.find_peaks(x, prominence=0.02, distance=5),
+                              find_peaks(x, prominence=0.02, distance=5)[0])
+
+
+def test_gaussian_wrap_is_scipys_gaussian_filter1d():
+    """measures.uncertainty.gaussian_wrap: the posterior draws' smoothing without importing
+    scipy.ndimage, bit for bit, short signals (wrapped more than once) and long, any SD."""
+    from scipy.ndimage import gaussian_filter1d
+
+    from armtrack_cli.measures.uncertainty import gaussian_wrap
+
+    rng = np.random.default_rng(6)
+    for trial in range(200):
+        n = int(rng.integers(1, 400)) if trial else 18_000
+        sigma = float(rng.choice([0.1, 0.37, 1.0, 2.5, 15.0, 50.0, rng.uniform(0.1, 80)]))
+        x = rng.standard_normal((int(rng.integers(1, 4)), n, 3))
+        assert np.array_equal(gaussian_wrap(x, sigma, axis=1),
+                              gaussian_filter1d(x, sigma, axis=1, mode="wrap"))
+        assert np.array_equal(gaussian_wrap(x[0, :, 0], sigma, axis=0),
+                              gaussian_filter1d(x[0, :, 0], sigma, mode="wrap"))

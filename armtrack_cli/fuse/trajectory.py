@@ -1,16 +1,17 @@
-"""The per-frame estimates of a method as the contract's trajectory table."""
+"""The per-frame estimates of a method as the contract's trajectory table: column name ->
+(n,) float64, in the contract's order (session/column_csv.write_columns writes it; no pandas
+in fuse, issue 15)."""
 
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 
 from armtrack_cli.fuse.methods import Estimates, Inputs
 from armtrack_cli.fuse.models import Arm
 
 
 def trajectory_table(t_frames: np.ndarray, frames: np.ndarray, est: Estimates, inp: Inputs,
-                     arm: Arm | None) -> pd.DataFrame:
+                     arm: Arm | None) -> dict[str, np.ndarray]:
     """Every video frame (t_frames, (n,) s); the filter's rows are ``frames``. Rows before the
     filter starts or after the IMU ends are empty (missing, not invented)."""
     n = t_frames.size
@@ -43,16 +44,16 @@ def trajectory_table(t_frames: np.ndarray, frames: np.ndarray, est: Estimates, i
         e = np.full(n, np.nan)
         e[frames] = est.ess
         cols["ess"] = e
-    return pd.DataFrame(cols)
+    return cols
 
 
-def impossible_rows(table: pd.DataFrame, *, shoulder: np.ndarray | None, reach_m: float | None,
+def impossible_rows(table: dict[str, np.ndarray], *, shoulder: np.ndarray | None, reach_m: float | None,
                     bound_m: float) -> np.ndarray:
     """(n,) True where the estimated wrist lies where no wrist can be: farther than
     ``reach_m`` from the shoulder (arm model), or than ``bound_m`` from W's origin."""
-    w = table[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
+    w = np.c_[table["wrist_x"], table["wrist_y"], table["wrist_z"]]
     ok = np.isfinite(w).all(axis=1)
-    far = np.zeros(len(table), bool)
+    far = np.zeros(len(w), bool)
     if shoulder is not None and reach_m is not None:
         far[ok] = np.linalg.norm(w[ok] - shoulder, axis=1) > reach_m
     else:
@@ -60,8 +61,6 @@ def impossible_rows(table: pd.DataFrame, *, shoulder: np.ndarray | None, reach_m
     return far
 
 
-def blank(table: pd.DataFrame, rows: np.ndarray) -> pd.DataFrame:
+def blank(table: dict[str, np.ndarray], rows: np.ndarray) -> dict[str, np.ndarray]:
     """The rows left empty (missing) in every column but t."""
-    out = table.copy()
-    out.loc[rows, [c for c in out.columns if c != "t"]] = np.nan
-    return out
+    return {c: x if c == "t" else np.where(rows, np.nan, x) for c, x in table.items()}

@@ -9,6 +9,12 @@ class NotComputable(ValueError):
     """The measure has no value for this input; the message says why, in plain words."""
 
 
+# Measures of one movement: a session of several has them for each segment only (a SPARC or
+# an LDLJ of many movements and the rests between them is no movement's smoothness, and would
+# cost an FFT and a jerk integral as long as the session for every posterior draw).
+ONE_MOVEMENT = ("time_to_peak_speed", "sparc", "ldlj")
+
+
 @dataclass(frozen=True)
 class Settings:
     onset_fraction: float = 0.02  # onset/offset at 2 % of peak speed (Alt Murphy et al. 2011)

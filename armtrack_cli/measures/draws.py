@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armtrack_cli.measures.base import NotComputable, Settings
+from armtrack_cli.measures.base import ONE_MOVEMENT, NotComputable, Settings
 from armtrack_cli.measures.peaks import count_peaks_rows
 from armtrack_cli.measures.signal import lowpass, uniform
 
@@ -88,15 +88,18 @@ NAMES = ["wrist_peak_speed", "wrist_mean_speed", "time_to_peak_speed", "movement
 
 
 def window_values(t: np.ndarray, o: np.ndarray, length: np.ndarray, p: np.ndarray,
-                  v: np.ndarray, dist: np.ndarray, fs: float, reach: bool, s: Settings) -> Values:
+                  v: np.ndarray, dist: np.ndarray, fs: float, reach: bool, s: Settings, *,
+                  skip: tuple[str, ...] = ()) -> Values:
     """table._path_values of R windows at once (windows of draws): row r holds length[r]
     samples from sample o[r] of the clock t (M,) s, positions p (R, W, 3) m and speeds v (R, W)
-    m/s, anything finite past them; dist (R,) the movement units' least peak spacing."""
+    m/s, anything finite past them; dist (R,) the movement units' least peak spacing. The
+    measures named in ``skip`` are neither computed nor returned."""
     with np.errstate(divide="ignore", invalid="ignore"):  # rows without a value: masked
-        return _window_values(t, o, length, p, v, dist, fs, reach, s)
+        out = _window_values(t, o, length, p, v, dist, fs, reach, s, skip)
+    return {m: x for m, x in out.items() if m not in skip}
 
 
-def _window_values(t, o, length, p, v, dist, fs, reach, s) -> Values:
+def _window_values(t, o, length, p, v, dist, fs, reach, s, skip) -> Values:
     R, W = v.shape
     inside = np.arange(W) < length[:, None]
     k, vk, a, b = _spans(v, inside, s)
@@ -117,11 +120,13 @@ def _window_values(t, o, length, p, v, dist, fs, reach, s) -> Values:
     lowest = np.where(span, v, np.inf).min(axis=1)
     ok = moving & (n >= 10) & (vk != 0) & (vk - lowest != 0) & \
         np.isfinite(np.where(span, v, 0.0)).all(axis=1)
-    dt = 1.0 / fs
-    jerk = np.diff(v, 2, axis=1) / dt**2
-    dlj = (n * dt) ** 3 / vk**2 * _masked_sum(jerk**2, a, b - 1) * dt
-    out["ldlj"] = np.where(ok & (dlj > 0), -np.log(np.where(dlj > 0, dlj, 1.0)), np.nan)
-    out["sparc"] = _sparc(v, a, n, fs, s, ok)
+    if "ldlj" not in skip:
+        dt = 1.0 / fs
+        jerk = np.diff(v, 2, axis=1) / dt**2
+        dlj = (n * dt) ** 3 / vk**2 * _masked_sum(jerk**2, a, b - 1) * dt
+        out["ldlj"] = np.where(ok & (dlj > 0), -np.log(np.where(dlj > 0, dlj, 1.0)), np.nan)
+    if "sparc" not in skip:
+        out["sparc"] = _sparc(v, a, n, fs, s, ok)
     units = np.zeros(R)
     for gap in np.unique(dist).tolist():
         r = np.flatnonzero(dist == gap)
@@ -165,11 +170,11 @@ class PathDraws:
         fs = 1.0 / (tu[1] - tu[0])
         segs, dist, whole = self._geometry(tu)
         zero = np.zeros(c, int)
+        several = ONE_MOVEMENT if len(segs) > 1 else ()  # as table.path_values
         out = {(m, "session"): x for m, x in window_values(
-            tu, zero, zero + M, p, v, zero + whole, fs, False, s).items()}
-        if len(segs) < 2:
+            tu, zero, zero + M, p, v, zero + whole, fs, False, s, skip=several).items()}
+        if not several:
             return out
-        del out[("time_to_peak_speed", "session")]  # path_values: several movements
         o, length = segs[:, 0], segs[:, 1] - segs[:, 0]
         idx = np.minimum(o[:, None] + np.arange(max(int(length.max()), 1)), M - 1)
         S = len(segs)

@@ -10,6 +10,7 @@ import numpy as np
 
 GRID_MAX = 200_000  # peaks × samples up to which prominences are found on one grid
 TABLE_MAX = 1 << 15  # samples up to which they are found on sparse tables (8 MB at most)
+#                      as they stand; a longer signal is first cut down to its maxima
 
 
 def local_maxima(x: np.ndarray) -> np.ndarray:
@@ -39,21 +40,20 @@ def by_distance(peaks: np.ndarray, height: np.ndarray, distance: int) -> np.ndar
     return keep
 
 
-def _side_min(x: np.ndarray, p: int, step: int) -> float:
-    """The lowest sample from p (included) towards ``step`` (−1 left, +1 right) before the
-    first sample higher than x[p] (or the end)."""
-    w = 64
-    while True:
-        lo, hi = (max(p - w, 0), p) if step < 0 else (p + 1, min(p + 1 + w, x.size))
-        higher = np.flatnonzero(x[lo:hi] > x[p])
-        done = higher.size or (lo == 0 if step < 0 else hi == x.size)
-        if done:
-            if step < 0:
-                first = lo + higher[-1] + 1 if higher.size else 0
-                return float(x[first:p + 1].min())
-            last = lo + higher[0] if higher.size else x.size
-            return float(x[p:last].min())
-        w *= 4
+def _maxima_and_valleys(x: np.ndarray, peaks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(y, at): x cut down to its local maxima and its two ends, each two of them with the
+    lowest sample of x from the first up to the second between them, and where ``peaks``
+    (local maxima of x) lie in y. Every peak has the prominence in y that it has in x: between
+    two neighbouring maxima x has no other maximum, so no sample there is higher than both;
+    a search from a peak stops at the first maximum higher than it (the samples before it
+    on that side that are higher still lead up to it) and passes every lowest sample on its
+    way. Comparisons and minima only: exactly the values of x. A 60-minute session's speed
+    (108,000 samples) has a few thousand maxima."""
+    cand = np.union1d(local_maxima(x), [0, x.size - 1])
+    y = np.empty(2 * cand.size - 1)
+    y[0::2] = x[cand]
+    y[1::2] = np.minimum.reduceat(x, cand)[:-1]  # min x[cand[k] : cand[k + 1]]
+    return y, 2 * np.searchsorted(cand, peaks)
 
 
 def _table(x: np.ndarray, op) -> list[np.ndarray]:
@@ -98,14 +98,14 @@ def _prominences_table(x: np.ndarray, peaks: np.ndarray) -> np.ndarray:
 
 def prominences(x: np.ndarray, peaks: np.ndarray) -> np.ndarray:
     """Each peak's height above the higher of the lowest points to its left and right, each
-    searched up to the first sample higher than the peak. All peaks at once on a (peaks,
-    samples) grid when that is small (a segment's: the same samples' minimum, so the same
-    values), else on sparse tables (``_prominences_table``), else one peak at a time."""
+    searched up to the first sample higher than the peak; ``peaks`` are local maxima of x.
+    All peaks at once on a (peaks, samples) grid when that is small (a segment's: the same
+    samples' minimum, so the same values), else on sparse tables (``_prominences_table``),
+    of x itself or, for a long x, of its maxima and the valleys between them."""
     if peaks.size * x.size > GRID_MAX:
         if x.size <= TABLE_MAX:
             return _prominences_table(x, peaks)
-        return np.array([x[p] - max(_side_min(x, p, -1), _side_min(x, p, 1)) for p in peaks],
-                        float)
+        return _prominences_table(*_maxima_and_valleys(x, peaks))
     i = np.arange(x.size)
     top = x[peaks][:, None]
     higher = x[None, :] > top  # (k, n)

@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from armtrack_cli.measures import angles, path, smoothness
-from armtrack_cli.measures.base import DEFAULT, NotComputable, Settings
+from armtrack_cli.measures.base import DEFAULT, ONE_MOVEMENT, NotComputable, Settings
 from armtrack_cli.measures.draws import PathDraws
 from armtrack_cli.measures.segments import segments
 from armtrack_cli.measures.signal import speed_profile
@@ -65,7 +65,9 @@ def _try(f: Callable[[], float]) -> Value:
     return float(v) if np.isfinite(v) else "not computable: no finite value"
 
 
-def _path_values(t, p, v, fs: float, reach: bool, s: Settings) -> dict[str, Value]:
+def _path_values(t, p, v, fs: float, reach: bool, s: Settings, *,
+                 skip: tuple[str, ...] = ()) -> dict[str, Value]:
+    """Every path measure of one window but those named in ``skip`` (not computed)."""
     try:  # onset and offset once for every measure that needs them
         span: tuple[int, int] | None = path.onset_offset(v, s)
     except NotComputable:
@@ -75,19 +77,19 @@ def _path_values(t, p, v, fs: float, reach: bool, s: Settings) -> dict[str, Valu
         a, b = span or path.onset_offset(v, s)
         return v[a:b + 1]
 
-    out = {
-        "wrist_peak_speed": _try(lambda: v[path.peak(v, s)]),
-        "wrist_mean_speed": _try(lambda: path.mean_speed(v, s, span=span)),
-        "time_to_peak_speed": _try(lambda: path.time_to_peak(t, v, s, span=span)),
-        "movement_time": _try(lambda: path.movement_time(t, v, s, span=span)),
-        "wrist_path_length": _try(lambda: path.path_length(p, v, s, span=span)),
-        "movement_units": _try(lambda: smoothness.movement_units(t, moving(), s)[0]),
-        "sparc": _try(lambda: smoothness.sparc(moving(), fs, s)),
-        "ldlj": _try(lambda: smoothness.ldlj(moving(), fs)),
+    measures = {
+        "wrist_peak_speed": lambda: v[path.peak(v, s)],
+        "wrist_mean_speed": lambda: path.mean_speed(v, s, span=span),
+        "time_to_peak_speed": lambda: path.time_to_peak(t, v, s, span=span),
+        "movement_time": lambda: path.movement_time(t, v, s, span=span),
+        "wrist_path_length": lambda: path.path_length(p, v, s, span=span),
+        "movement_units": lambda: smoothness.movement_units(t, moving(), s)[0],
+        "sparc": lambda: smoothness.sparc(moving(), fs, s),
+        "ldlj": lambda: smoothness.ldlj(moving(), fs),
     }
     if reach:
-        out["straightness"] = _try(lambda: path.straightness(p, v, s, span=span))
-    return out
+        measures["straightness"] = lambda: path.straightness(p, v, s, span=span)
+    return {k: _try(f) for k, f in measures.items() if k not in skip}
 
 
 def path_values(inp: Inputs, s: Settings, windows: list | None = None
@@ -101,16 +103,16 @@ def path_values(inp: Inputs, s: Settings, windows: list | None = None
         why = f"not computable: {exc}"
         return {(k, "session"): why for k in PATH if k != "straightness" or reach}, []
     fs = 1.0 / (t[1] - t[0])
-    out = {(k, "session"): x for k, x in _path_values(t, p, v, fs, False, s).items()}
     own = segments(t, v, s)
-    out[("segments", "session")] = float(len(own))  # always this signal's own count
     if windows is None:  # windows in session time, so other samplings use the same segments
         windows = [(t[a], t[b - 1]) for a, b in own]
     segs = [(int(np.searchsorted(t, a - 1e-9)), int(np.searchsorted(t, b + 1e-9)))
             for a, b in windows]
-    if len(segs) > 1:
-        out[("time_to_peak_speed", "session")] = (f"not computable: {len(segs)} movements "
-                                                  "(see each segment)")
+    several = ONE_MOVEMENT if len(segs) > 1 else ()
+    out = {(k, "session"): x for k, x in _path_values(t, p, v, fs, False, s, skip=several).items()}
+    out.update({(k, "session"): f"not computable: {len(segs)} movements (see each segment)"
+                for k in several})
+    out[("segments", "session")] = float(len(own))  # always this signal's own count
     for n, (a, b) in enumerate(segs if len(segs) > 1 else [], 1):
         for k, x in _path_values(t[a:b], p[a:b], v[a:b], fs, reach, s).items():
             out[(k, str(n))] = x

@@ -103,8 +103,16 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
         s = score(m, t, est, truth)
         rows += s.rows
         excluded.update(s.excluded)
-    for_measures = denoised(truth, DEFAULT.lowpass_hz)  # filtered at its own rate, as labs do
-    del truth  # scored: from here one copy of the markers is held, not two (issue 15)
+    # filtered at its own rate, as labs do, a joint at a time: each joint's raw markers are
+    # dropped as its filtered ones are made (scored: a 60-minute capture's three joints held
+    # twice were 26 MB more; issue 15)
+    t_truth, rate, raw = truth.t, truth.rate_hz, dict(truth.xyz)
+    del truth
+    for_measures = Truth(t_truth, {}, rate)
+    for joint in list(raw):
+        one = Truth(t_truth, {joint: raw.pop(joint)}, rate)
+        for_measures.xyz.update(denoised(one, DEFAULT.lowpass_hz).xyz)
+        del one
     for m, traj in trajs.items():
         mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"),
                                     truth_inputs(trajectory_inputs(traj, session), session,

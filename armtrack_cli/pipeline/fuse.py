@@ -61,7 +61,7 @@ class Prepared:
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
-    from armtrack_cli.session.tables import read_patch_detections  # pandas: imported on use
+    from armtrack_cli.session.tables import read_patch_detections
 
     require(session, "imu")
     require(session, "camera")
@@ -168,7 +168,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     far = impossible_rows(table, shoulder=p.arm.shoulder if p.arm else None,
                           reach_m=p.arm.L1 + p.arm.L2 + REACH_MARGIN_M if p.arm else None,
                           bound_m=MAX_OBJECT_RANGE_M)
-    if far.all() or not np.isfinite(table["wrist_x"].to_numpy()[~far]).any():
+    if far.all() or not np.isfinite(table["wrist_x"][~far]).any():
         raise DataError(dest / name, f"{s.method} left the arm's reach in every frame; nothing "
                         "was written", "check [arm], [sync] and the detections")
     if far.any():
@@ -199,13 +199,15 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
 def _write(dest: Path, method: str, table, session: Session, q_WB: np.ndarray,
            settings: dict, auto) -> None:
     """The trajectory, its measures (kinematics-METHOD.csv) and the auto arm, all or none."""
-    from armtrack_cli.pipeline.kinematics import kinematics_table
-    from armtrack_cli.session.outputs import output_set, write_table
+    from armtrack_cli.pipeline.kinematics import KINEMATICS_COLUMNS, kinematics_cells
+    from armtrack_cli.session.column_csv import write_columns
+    from armtrack_cli.session.outputs import output_set, write_rows
 
-    kin = kinematics_table(table, session, q_WB=q_WB)
+    kin = kinematics_cells(table, session, q_WB=q_WB)
     with output_set():
-        write_table(dest / f"trajectory-{method}.csv", table, command="fuse", settings=settings)
-        write_table(dest / f"kinematics-{method}.csv", kin, command="fuse", settings=settings)
+        write_columns(dest / f"trajectory-{method}.csv", table, command="fuse", settings=settings)
+        write_rows(dest / f"kinematics-{method}.csv", kin, command="fuse", settings=settings,
+                   columns=KINEMATICS_COLUMNS)
         if auto:
             write_arm_estimate(dest, auto.as_dict())
 

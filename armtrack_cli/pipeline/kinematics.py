@@ -48,15 +48,25 @@ def _cell(v) -> str:
     return v if isinstance(v, str) else f"{v:.6f}"
 
 
-def kinematics_table(traj: pd.DataFrame, session: Session, *,
-                     q_WB: np.ndarray | None = None) -> pd.DataFrame:
-    """kinematics-METHOD.csv: measure, segment, value (a number or "not computable: why"),
-    sd (posterior uncertainty), unit (with the angle's convention)."""
-    import pandas as pd  # fuse's table; compare reads and writes its own without pandas
+KINEMATICS_COLUMNS = ("measure", "segment", "value", "sd", "unit", "t_start", "t_end")
 
+
+def kinematics_cells(traj: pd.DataFrame | dict, session: Session, *,
+                     q_WB: np.ndarray | None = None) -> list[dict]:
+    """kinematics-METHOD.csv's rows: measure, segment, value (a number's text or "not
+    computable: why"), sd (posterior uncertainty), unit (with the angle's convention),
+    t_start, t_end (KINEMATICS_COLUMNS; outputs.write_rows writes them without pandas)."""
     rows = measure_rows(trajectory_inputs(traj, session, q_WB=q_WB))
-    return pd.DataFrame([{**r, "value": _cell(r["value"])} for r in rows],
-                        columns=["measure", "segment", "value", "sd", "unit", "t_start", "t_end"])
+    return [{**r, "value": _cell(r["value"])} for r in rows]
+
+
+def kinematics_table(traj: pd.DataFrame | dict, session: Session, *,
+                     q_WB: np.ndarray | None = None) -> pd.DataFrame:
+    """kinematics_cells as a DataFrame (the palm pipeline's and the report's tests' table)."""
+    import pandas as pd
+
+    return pd.DataFrame(kinematics_cells(traj, session, q_WB=q_WB),
+                        columns=list(KINEMATICS_COLUMNS))
 
 
 def truth_inputs(est: Inputs, session: Session, truth: dict[str, np.ndarray]) -> Inputs | None:

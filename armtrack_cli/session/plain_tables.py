@@ -54,10 +54,19 @@ def trajectory_columns(path: Path) -> dict[str, np.ndarray]:
         return {str(c): df[c].to_numpy(dtype=float) for c in df.columns}
 
 
-def _plain_trajectory(path: Path) -> dict[str, np.ndarray]:
-    """The columns streamed by session/numeric_text (plain numbers only, empty cells NaN)."""
-    regular_file(path, DataError, "a CSV table", hint="run `armtrack fuse SESSION --method M` first",
-                 max_bytes=MAX_TEXT_BYTES)
+def plain_columns(path: Path, needs: tuple[str, ...], hint: str) -> dict[str, np.ndarray] | None:
+    """A CSV table armtrack wrote, as column -> (N,) float64 (empty cells NaN), streamed by
+    session/numeric_text, when it is in the plain form (a header naming ``needs``, plain
+    numbers, nothing infinite); None for any other file, for a pandas reader to read or refuse
+    with its one-line error (tables.read_patch_detections)."""
+    try:
+        return _plain_columns(Path(path), needs, hint)
+    except _Irregular:
+        return None
+
+
+def _plain_columns(path: Path, needs: tuple[str, ...], hint: str) -> dict[str, np.ndarray]:
+    regular_file(path, DataError, "a CSV table", hint=hint, max_bytes=MAX_TEXT_BYTES)
     with open(path, "rb") as f:
         head = f.readline()
     try:
@@ -65,7 +74,7 @@ def _plain_trajectory(path: Path) -> dict[str, np.ndarray]:
     except UnicodeDecodeError:
         raise _Irregular from None
     if (len(set(names)) != len(names) or any(n != n.strip() or not n or '"' in n for n in names)
-            or not set(TRAJECTORY_NEEDS) <= set(names)):
+            or not set(needs) <= set(names)):
         raise _Irregular
     try:
         values = file_rows(path, 1, Layout(len(names), ",", tuple(names)), DataError,
@@ -76,10 +85,16 @@ def _plain_trajectory(path: Path) -> dict[str, np.ndarray]:
         raise _Irregular
     cols = {n: np.ascontiguousarray(values[:, k]) for k, n in enumerate(names)}
     del values
+    return cols
+
+
+def _plain_trajectory(path: Path) -> dict[str, np.ndarray]:
+    """The columns streamed by session/numeric_text (plain numbers only, empty cells NaN)."""
+    cols = _plain_columns(path, TRAJECTORY_NEEDS, "run `armtrack fuse SESSION --method M` first")
     t = cols["t"]
     if np.isnan(t).any() or (np.diff(t) <= 0).any():
         raise _Irregular
-    pos = [n for n in names if n.split("_")[0] in ("wrist", "elbow", "shoulder")
+    pos = [n for n in cols if n.split("_")[0] in ("wrist", "elbow", "shoulder")
            and n.rsplit("_", 1)[-1] in ("x", "y", "z") and "_v" not in n]
     if any((np.abs(np.nan_to_num(cols[n])) > MAX_POSITION_M).any() for n in pos):
         raise _Irregular

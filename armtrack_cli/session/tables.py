@@ -71,14 +71,25 @@ def read_patch_detections(path: Path, *, width: int, height: int,
                           n_frames: int) -> tuple[np.ndarray, np.ndarray]:
     """(t (K,), uv (K, 2) with NaN where ok = 0), checked against the camera's image size and
     the video's frame count: one row per frame, in order, times increasing, pixels inside the
-    image (up to a margin of limits.MAX_PIXEL_MARGIN of its size)."""
-    df = read_csv_table(path, ("frame", "t", "u", "v", "ok"),
-                        "run `armtrack detect SESSION` first (wrist-patch sessions)")
-    frame, t, ok = numeric(path, df, ("frame", "t", "ok"), missing_ok=False).T
-    uv = numeric(path, df, ("u", "v"))
-    if len(df) != n_frames or not np.array_equal(frame, np.arange(len(df))):
-        raise DataError(path, f"has {len(df)} rows for frames {frame[0]:g}…{frame[-1]:g} but the "
-                        f"video has {n_frames} frames (0…{n_frames - 1})" if len(df) else
+    image (up to a margin of limits.MAX_PIXEL_MARGIN of its size). The file as detect writes
+    it is read without pandas (session/plain_tables.py); any other, by pandas, which names
+    what is wrong with it."""
+    from armtrack_cli.session.plain_tables import plain_columns
+
+    need, hint = ("frame", "t", "u", "v", "ok"), \
+        "run `armtrack detect SESSION` first (wrist-patch sessions)"
+    cols = plain_columns(path, need, hint)
+    if cols is not None and not any(np.isnan(cols[c]).any() for c in ("frame", "t", "ok")):
+        frame, t, ok, uv = cols["frame"], cols["t"], cols["ok"], np.c_[cols["u"], cols["v"]]
+    else:  # empty frame, t or ok cells: pandas' reader names the row
+        df = read_csv_table(path, need, hint)
+        frame, t, ok = numeric(path, df, ("frame", "t", "ok"), missing_ok=False).T
+        uv = numeric(path, df, ("u", "v"))
+    del cols
+    n = len(t)
+    if n != n_frames or not np.array_equal(frame, np.arange(n)):
+        raise DataError(path, f"has {n} rows for frames {frame[0]:g}…{frame[-1]:g} but the "
+                        f"video has {n_frames} frames (0…{n_frames - 1})" if n else
                         "has no rows", "rerun `armtrack detect` on this session")
     increasing_times(path, t)
     if not np.isin(ok, (0, 1)).all():
