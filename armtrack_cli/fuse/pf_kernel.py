@@ -184,16 +184,22 @@ def _dist_tuple(d):
 
 
 @njit(cache=True, error_model="numpy")
-def _walk_and_constrain(xs, eps, walk, centre, L1, inv2c2, lw):
-    """Step 4, the random-walk layer p² (eqs. 17, 18) from eps rows 6-11; step 5,
-    lw_i = −r_i² / 2σ² with r_i = |p_i − centre| − L1 (eq. 15 on the upper-arm length, see
-    methods.py)."""
+def _walk_and_constrain(xs, idx, out, eps, walk, centre, L1, inv2c2, lw):
+    """Step 4, the random-walk layer p² (eqs. 17, 18) from eps rows 6-11 on the particles
+    xs[:, idx] (step 3's resampled set, gathered in the same pass; idx[0] < 0: xs itself), into
+    out (6, N); step 5, lw_i = −r_i² / 2σ² with r_i = |p_i − centre| − L1 (eq. 15 on the
+    upper-arm length, see methods.py)."""
     n = xs.shape[1]
-    for j in range(6):
-        for i in range(n):
-            xs[j, i] = xs[j, i] + eps[6 + j, i] * walk[j]
+    if idx[0] < 0:
+        for j in range(6):
+            for i in range(n):
+                out[j, i] = xs[j, i] + eps[6 + j, i] * walk[j]
+    else:
+        for j in range(6):
+            for i in range(n):
+                out[j, i] = xs[j, idx[i]] + eps[6 + j, i] * walk[j]
     for i in range(n):
-        d0, d1, d2 = xs[0, i] - centre[0], xs[1, i] - centre[1], xs[2, i] - centre[2]
+        d0, d1, d2 = out[0, i] - centre[0], out[1, i] - centre[1], out[2, i] - centre[2]
         r = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - L1
         lw[i] = -inv2c2 * r * r
 
@@ -317,7 +323,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     codes = np.zeros(n_frames, np.int8)
     w_prior, px = np.empty(N), np.empty((2, N))
     seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
-    idx = np.empty(N, np.int64)
+    idx, shift = np.empty(N, np.int64), np.zeros(3)
     work, start = np.empty((3, N)), np.empty(2 * N + 2, np.int64)
     uniform = True  # every w_i is exactly 1/N
     run_gated, ss = 0, 0.0
@@ -335,28 +341,25 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
             uniform = False
         n_eff[k] = 1.0 / (ss if seen else _sum_sq(w))  # Σ w² from the normalisation
         if constrained:
-            if seen:  # step 3 (without a detection the weights are still equal)
+            idx[0] = -1  # no detection: no step 3 (the weights are still equal)
+            if seen:  # step 3
                 _resample(w, state, scheme, idx, work, start)
-                _take(xs, idx, xr)
-                xs, xr = xr, xs
-            _walk_and_constrain(xs, eps, walk, centres[k], L1, inv2c2, lw)  # steps 4, 5
+            _walk_and_constrain(xs, idx, xr, eps, walk, centres[k], L1, inv2c2, lw)  # 3-5
+            xs, xr = xr, xs
             _normalise(lw, w)
             _moments(xs, w, mean[k], cov[k], xr)
             _resample(w, state, scheme, idx, work, start)  # step 6
+            for j in range(3):  # the velocity the cloud is given (methods.run_particles)
+                shift[j] = v_gain * (v_ref[k, j] - mean[k, 3 + j]) if v_gain > 0.0 else 0.0
         else:
             _moments(xs, w, mean[k], cov[k], xr)
             if n_eff[k] >= resample_ess * N:
                 continue
             _resample(w, state, scheme, idx, work, start)
-        _take(xs, idx, xr)
+        _take(xs, idx, xr, shift)
         xs, xr = xr, xs
         w[:] = 1.0 / N
         uniform = True
-        if constrained and v_gain > 0.0:
-            for j in range(3):
-                shift = v_gain * (v_ref[k, j] - mean[k, 3 + j])
-                for i in range(N):
-                    xs[3 + j, i] += shift
     return mean, cov, n_eff, codes
 
 
