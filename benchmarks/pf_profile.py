@@ -51,9 +51,9 @@ def _gate(r, px, w, z):
 
 
 @njit
-def _walk(r, xs, idx, xr, eps, walk, centre, lw):
+def _walk(r, xs, eps, walk, centre, lw):
     for _ in range(r):
-        K._walk_and_constrain(xs, idx, xr, eps, walk, centre, 0.31, 5000.0, lw)
+        K._walk_and_constrain(xs, eps, walk, centre, 0.31, 5000.0, lw)
 
 
 @njit
@@ -86,10 +86,9 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
              ("normalise the weights (exp)", 2, _normalise, (lw, w)),
              ("residual resampling", 2, _resample, (w, s, idx, work, start)),
              ("χ² gate on the predicted pixels", 1, _gate, (px, w, z)),
-             ("gather the resampled particles, their velocities moved", 1, _take,
-              (xs, idx, xr, np.full(3, 1e-3))),
-             ("gather, random walk and arm constraint (eqs. 15-18)", 1, _walk,
-              (xs, idx, xr, eps, walk, centre, np.empty(n))),
+             ("gather the resampled particles", 2, _take, (xs, idx, xr, np.zeros(3))),
+             ("random walk and arm constraint (eqs. 15-18)", 1, _walk,
+              (xs.copy(), eps, walk, centre, np.empty(n))),
              ("weighted mean and covariance", 1, _moments, (xs, w, mean, cov, xr))]
     rows = []
     for name, times, fn, args in cases:
