@@ -39,9 +39,9 @@ def _resample(r, w, s, idx, work, start):
 
 
 @njit
-def _take(r, xs, idx, xr):
+def _take(r, xs, idx, xr, shift):
     for _ in range(r):
-        K._take(xs, idx, xr)
+        K._take(xs, idx, xr, shift)
 
 
 @njit
@@ -86,7 +86,7 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
              ("normalise the weights (exp)", 2, _normalise, (lw, w)),
              ("residual resampling", 2, _resample, (w, s, idx, work, start)),
              ("χ² gate on the predicted pixels", 1, _gate, (px, w, z)),
-             ("gather the resampled particles", 2, _take, (xs, idx, xr)),
+             ("gather the resampled particles", 2, _take, (xs, idx, xr, np.zeros(3))),
              ("random walk and arm constraint (eqs. 15-18)", 1, _walk,
               (xs.copy(), eps, walk, centre, np.empty(n))),
              ("weighted mean and covariance", 1, _moments, (xs, w, mean, cov, xr))]

@@ -187,7 +187,8 @@ def _dist_tuple(d):
 def _walk_and_constrain(xs, eps, walk, centre, L1, inv2c2, lw):
     """Step 4, the random-walk layer p² (eqs. 17, 18) from eps rows 6-11; step 5,
     lw_i = −r_i² / 2σ² with r_i = |p_i − centre| − L1 (eq. 15 on the upper-arm length, see
-    methods.py)."""
+    methods.py). (Apart from step 3's gather: this loop in SIMD and the gather's one at a
+    time are faster than both in one loop, 2.49 against 2.63 µs at 500 particles.)"""
     n = xs.shape[1]
     for j in range(6):
         for i in range(n):
@@ -317,7 +318,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     codes = np.zeros(n_frames, np.int8)
     w_prior, px = np.empty(N), np.empty((2, N))
     seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
-    idx = np.empty(N, np.int64)
+    idx, shift, no_shift = np.empty(N, np.int64), np.zeros(3), np.zeros(3)
     work, start = np.empty((3, N)), np.empty(2 * N + 2, np.int64)
     uniform = True  # every w_i is exactly 1/N
     run_gated, ss = 0, 0.0
@@ -337,26 +338,23 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
         if constrained:
             if seen:  # step 3 (without a detection the weights are still equal)
                 _resample(w, state, scheme, idx, work, start)
-                _take(xs, idx, xr)
+                _take(xs, idx, xr, no_shift)
                 xs, xr = xr, xs
             _walk_and_constrain(xs, eps, walk, centres[k], L1, inv2c2, lw)  # steps 4, 5
             _normalise(lw, w)
             _moments(xs, w, mean[k], cov[k], xr)
             _resample(w, state, scheme, idx, work, start)  # step 6
+            for j in range(3):  # the velocity the cloud is given (methods.run_particles)
+                shift[j] = v_gain * (v_ref[k, j] - mean[k, 3 + j]) if v_gain > 0.0 else 0.0
         else:
             _moments(xs, w, mean[k], cov[k], xr)
             if n_eff[k] >= resample_ess * N:
                 continue
             _resample(w, state, scheme, idx, work, start)
-        _take(xs, idx, xr)
+        _take(xs, idx, xr, shift)
         xs, xr = xr, xs
         w[:] = 1.0 / N
         uniform = True
-        if constrained and v_gain > 0.0:
-            for j in range(3):
-                shift = v_gain * (v_ref[k, j] - mean[k, 3 + j])
-                for i in range(N):
-                    xs[3 + j, i] += shift
     return mean, cov, n_eff, codes
 
 

@@ -160,11 +160,17 @@ def _emit(idx, m, i, c):
 
 
 @njit(cache=True, error_model="numpy")
-def _take(xs, idx, out):
-    """out = xs[:, idx] (the resampled particles, (6, N))."""
+def _take(xs, idx, out, shift):
+    """out = xs[:, idx] (the resampled particles, (6, N)), their velocities (rows 3-5) moved
+    by shift (3,) where it is not zero, in the same pass."""
     for j in range(6):
-        for i in range(idx.size):
-            out[j, i] = xs[j, idx[i]]
+        c = shift[j - 3] if j >= 3 else 0.0
+        if c == 0.0:
+            for i in range(idx.size):
+                out[j, i] = xs[j, idx[i]]
+        else:
+            for i in range(idx.size):
+                out[j, i] = xs[j, idx[i]] + c
 
 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
