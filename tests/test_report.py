@@ -124,6 +124,22 @@ def test_the_first_page_says_who_what_and_the_verdict(arm):
     assert re.search(r"Verdict: (good|usable with care|not usable)", first)
 
 
+def test_smoothness_of_several_movements_is_their_median_on_the_first_page(arm):
+    """circle-01 holds three movements: its session SPARC is not computable (one movement's
+    measure, measures/base.ONE_MOVEMENT); page 1 gives the median over the movements from
+    kinematics CSV's segment rows, with their range."""
+    _, out = arm
+    k = pd.read_csv(out / "kinematics-arm-smoother.csv", dtype={"value": str, "segment": str})
+    sparc = k[k["measure"] == "sparc"]
+    assert sparc[sparc["segment"] == "session"]["value"].iloc[0].startswith("not computable")
+    seg = sparc[sparc["segment"] != "session"]["value"].astype(float).to_numpy()
+    assert seg.size >= 2
+    first = " ".join(pdf_pages(out / "report.pdf")[0].split())
+    line = (f"smoothness, SPARC (nearer 0 = smoother): median {shown(np.median(seg), 2)} over "
+            f"{seg.size} movements (from {shown(seg.min(), 2)} to {shown(seg.max(), 2)})")
+    assert line in first
+
+
 def _synthetic_palm(work, seed=7):
     """trajectory-ukf-palm.csv from the exact truth of wrist-rom-01: angles + 0.5° noise,
     WRIST marker + 1 mm noise, both smoothed over 0.5 s (a filter's errors are smooth), with

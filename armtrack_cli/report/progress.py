@@ -10,7 +10,7 @@ import math
 
 from armtrack_cli.report import layout, words
 from armtrack_cli.report.data import SessionReport
-from armtrack_cli.report.summary import lookup
+from armtrack_cli.report.summary import lookup, over_movements
 
 KEY = ("elbow_flexion_rom", "shoulder_elevation_rom", "forearm_pronation_rom", "wrist_flexion_rom",
        "wrist_deviation_rom", "wrist_pronation_rom", "wrist_peak_speed", "wrist_mean_speed",
@@ -25,7 +25,14 @@ def _num(s) -> float:
 
 
 def series(reports: list[SessionReport], measure: str) -> list[tuple[float, float]]:
-    return [(_num(v), sd) for v, sd in (lookup(r, measure) for r in reports)]
+    """(value, sd) of each session; a measure of one movement in a session of several: the
+    median over its movements, without an SD (summary.over_movements)."""
+    out = []
+    for r in reports:
+        v, sd = lookup(r, measure)
+        many = over_movements(r, measure) if not math.isfinite(_num(v)) else None
+        out.append((many[0], float("nan")) if many else (_num(v), sd))
+    return out
 
 
 def change(prev: tuple[float, float], cur: tuple[float, float]) -> tuple[float, str]:

@@ -28,13 +28,42 @@ def lookup(r: SessionReport, measure: str, segment: str = "session") -> tuple[st
     return str(row["value"].iloc[0]), float(row["sd"].iloc[0])
 
 
+def over_movements(r: SessionReport, measure: str) -> tuple[float, int, float, float] | None:
+    """(median, count, lowest, highest) of a measure over the session's movements (its numbered
+    segments with a value), for the measures of one movement (SPARC, LDLJ) whose session row
+    is not computable when the session holds several (measures/base.ONE_MOVEMENT); None
+    without a segment value."""
+    import numpy as np
+
+    k = r.kinematics
+    if k is None:
+        return None
+    rows = k[(k["measure"] == measure) & (k["segment"] != "session")]
+    vals = np.array([float(v) for v in rows["value"] if _finite(v)])
+    if not vals.size:
+        return None
+    return float(np.median(vals)), int(vals.size), float(vals.min()), float(vals.max())
+
+
+def _finite(cell) -> bool:
+    try:
+        return math.isfinite(float(cell))
+    except (TypeError, ValueError):
+        return False
+
+
 def value_text(r: SessionReport, measure: str, segment: str = "session") -> str | None:
     """'50.2° ± 2.2°' / '0.214 m/s ± 0.026 m/s' / 'not computable: why'; None if absent."""
     v, sd = lookup(r, measure, segment)
     if v is None:
         return None
     if v.startswith("not computable"):
-        return v
+        many = over_movements(r, measure) if segment == "session" else None
+        if many is None or many[1] < 2:
+            return v
+        med, n, lo, hi = many
+        return (f"median {words.with_unit(med, measure)} over {n} movements (from "
+                f"{words.with_unit(lo, measure)} to {words.with_unit(hi, measure)})")
     out = words.with_unit(v, measure)
     if math.isfinite(sd):
         out += f" ± {words.with_unit(sd, measure)}"
