@@ -12,3 +12,9 @@ import os as _os
 # one line per error, so their logging is quieted unless the user asks for it.
 _os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
 _os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
+# numba's compiled kernels are cached per version of all their sources, not per file
+# (session/kernel_cache.py): a change to a helper kernel cannot leave stale machine code.
+from armtrack_cli.session.kernel_cache import configure as _configure_kernel_cache  # noqa: E402
+
+_configure_kernel_cache()
