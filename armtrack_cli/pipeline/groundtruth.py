@@ -8,16 +8,20 @@ for it (Nexus exports the unworn landmarks as empty columns).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from armtrack_cli.compare import hand_truth, joint_centres
-from armtrack_cli.compare.score import Truth
+from armtrack_cli.compare import joint_centres
 from armtrack_cli.core.errors import ConfigError, GroundTruthError
 from armtrack_cli.core.streams import MarkerTrajectories
 from armtrack_cli.session.config import Session
 from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.point_expr import point_markers
 from armtrack_cli.session.qualisys import missing_marker, to_world
+
+if TYPE_CHECKING:  # compare's scoring and the hand's angles: loaded where used (`info` needs neither)
+    from armtrack_cli.compare.score import Truth
 
 
 def _columns(traj: MarkerTrajectories, names: list[str], what: str) -> np.ndarray:
@@ -125,6 +129,8 @@ def joint_points(session: Session, traj: MarkerTrajectories) -> dict[str, np.nda
 def read_truth(session: Session, *, offset_s: float | None = None) -> Truth:
     """The [groundtruth] joints in W, on the session clock (session time = stream + offset;
     the declared offset unless ``offset_s`` is given)."""
+    from armtrack_cli.compare.score import Truth
+
     gt = session.groundtruth
     traj = read_markers(gt.file)
     pts = joint_points(session, traj)
@@ -142,6 +148,8 @@ def read_hand_angles(session: Session) -> tuple[np.ndarray, np.ndarray] | None:
     gt = session.groundtruth
     if gt is None or gt.hand is None:
         return None
+    from armtrack_cli.compare import hand_truth
+
     traj = read_markers(gt.file)
     R_WH = body_rotation_W(traj, gt.hand, gt.to_world, session.toml_path)
     t = traj.t + session.offset_s("groundtruth_offset_s")
