@@ -10,18 +10,11 @@ import math
 
 from armtrack_cli.report import layout, words
 from armtrack_cli.report.data import SessionReport
-from armtrack_cli.report.summary import lookup, over_movements
+from armtrack_cli.report.summary import as_number, lookup, over_movements
 
 KEY = ("elbow_flexion_rom", "shoulder_elevation_rom", "forearm_pronation_rom", "wrist_flexion_rom",
        "wrist_deviation_rom", "wrist_pronation_rom", "wrist_peak_speed", "wrist_mean_speed",
        "movement_time", "wrist_path_length", "movement_units", "sparc", "ldlj")
-
-
-def _num(s) -> float:
-    try:
-        return float(s)
-    except (TypeError, ValueError):
-        return float("nan")
 
 
 def series(reports: list[SessionReport], measure: str) -> list[tuple[float, float]]:
@@ -30,8 +23,8 @@ def series(reports: list[SessionReport], measure: str) -> list[tuple[float, floa
     out = []
     for r in reports:
         v, sd = lookup(r, measure)
-        many = over_movements(r, measure) if not math.isfinite(_num(v)) else None
-        out.append((many[0], float("nan")) if many else (_num(v), sd))
+        many = over_movements(r, measure) if not math.isfinite(as_number(v)) else None
+        out.append((many[0], float("nan")) if many else (as_number(v), sd))
     return out
 
 

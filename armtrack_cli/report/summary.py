@@ -39,17 +39,19 @@ def over_movements(r: SessionReport, measure: str) -> tuple[float, int, float, f
     if k is None:
         return None
     rows = k[(k["measure"] == measure) & (k["segment"] != "session")]
-    vals = np.array([float(v) for v in rows["value"] if _finite(v)])
+    vals = np.array([as_number(v) for v in rows["value"]])
+    vals = vals[np.isfinite(vals)]
     if not vals.size:
         return None
     return float(np.median(vals)), int(vals.size), float(vals.min()), float(vals.max())
 
 
-def _finite(cell) -> bool:
+def as_number(cell) -> float:
+    """A kinematics value cell as a number; NaN for 'not computable: …' and empty cells."""
     try:
-        return math.isfinite(float(cell))
+        return float(cell)
     except (TypeError, ValueError):
-        return False
+        return float("nan")
 
 
 def value_text(r: SessionReport, measure: str, segment: str = "session") -> str | None:
