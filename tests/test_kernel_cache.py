@@ -3,6 +3,7 @@ the cache folder's key follows their bytes."""
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -45,3 +46,36 @@ def test_numba_uses_the_folder_and_a_user_setting_wins(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env={**env, "NUMBA_CACHE_DIR": mine}).stdout.split()
     assert out == ["True", mine]
+
+
+def test_stale_kernel_folders_go_when_a_new_version_is_made(tmp_path):
+    """Folders of other versions unused for more than STALE_DAYS are removed, recent ones and
+    anything not a numba-* folder stay; the folder in use has its time stamp renewed."""
+    root = tmp_path / "armtrack"
+    now = 2.0e9
+    old, recent = now - (kernel_cache.STALE_DAYS + 1) * 86400.0, now - 86400.0
+    for name, stamp in (("numba-aaaa", old), ("numba-bbbb", recent), ("other", old),
+                        ("numba-keep", old)):
+        (root / name).mkdir(parents=True)
+        (root / name / "index.nbi").write_bytes(b"x")
+        os.utime(root / name, (stamp, stamp))
+    removed = kernel_cache.prune(root, keep="numba-keep", now=now)
+    assert removed == [root / "numba-aaaa"]
+    assert sorted(p.name for p in root.iterdir()) == ["numba-bbbb", "numba-keep", "other"]
+    assert kernel_cache.prune(tmp_path / "missing", keep="x", now=now) == []
+
+
+def test_the_import_renews_the_folder_in_use_and_prunes_on_a_new_version(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path)
+    root = tmp_path / "armtrack"
+    stale = root / "numba-0000000000000000"
+    stale.mkdir(parents=True)
+    os.utime(stale, (1.0e9, 1.0e9))
+    subprocess.run([sys.executable, "-c", "import armtrack_cli"], check=True, env=env)
+    assert not stale.exists()  # our version's folder did not exist: the stale one went
+    mine = root / f"numba-{kernel_cache.kernel_key()}"
+    mine.mkdir()
+    os.utime(mine, (1.0e9, 1.0e9))
+    subprocess.run([sys.executable, "-c", "import armtrack_cli"], check=True, env=env)
+    assert mine.stat().st_mtime > 1.5e9  # renewed
