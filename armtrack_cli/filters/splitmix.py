@@ -39,6 +39,8 @@ _U1, _U2, _U8, _U9, _U11 = np.uint64(1), np.uint64(2), np.uint64(8), np.uint64(9
 _U27, _U30, _U31, _U32 = np.uint64(27), np.uint64(30), np.uint64(31), np.uint64(32)
 _MASK23, _MASK32, _MASK8 = np.uint64(0x7FFFFF), np.uint64(0xFFFFFFFF), np.uint64(0xFF)
 _TWO_M53 = 1.0 / 9007199254740992.0
+_EXP84, _EXP52 = np.uint64(0x4530000000000000), np.uint64(0x4330000000000000)  # 2⁸⁴, 2⁵²
+_TWO84_PLUS_52 = 2.0**84 + 2.0**52
 
 
 def stream(rng: np.random.Generator) -> np.ndarray:
@@ -69,9 +71,18 @@ def fill_random(s, out):
     """out (n,) ← n uniforms on [0, 1), as ``uniforms(s, n)``."""
     z, n = s[0] + (s[1] + _U1) * _G, out.size
     for i in range(n):  # SIMD: each lane its own draw, z = base + iγ by induction (no multiply)
-        out[i] = np.float64(_mix(z) >> _U11) * _TWO_M53
+        out[i] = _exact_float(_mix(z) >> _U11) * _TWO_M53
         z += _G
     s[1] += np.uint64(n)
+
+
+@njit(cache=True, inline="always")
+def _exact_float(v):
+    """float(v) for v < 2⁵³, exactly, from its bits: each 32-bit half put into the mantissa of
+    2⁸⁴ and 2⁵² and the two subtracted (LLVM's own lowering of the unsigned conversion, which
+    on AVX2 it makes one lane at a time): 4.66 → 4.58 µs a residual resampling, 500 particles."""
+    hi = np.uint64((v >> _U32) | _EXP84).view(np.float64) - _TWO84_PLUS_52
+    return hi + np.uint64((v & _MASK32) | _EXP52).view(np.float64)
 
 
 @njit(cache=True, inline="always")

@@ -90,8 +90,8 @@ def _residual(w, s, idx, work, start):
     draws are counted per particle instead of sorted: each u_j·top is looked up in the
     cumulative fractional parts from a bucket table (one bucket per particle, filled in the
     cumulative sum's own pass) and walked to searchsorted's exact answer, #{cdf ≤ u_j·top}
-    (at most N − 1): three steps without a branch, then the rare rest. start (2N + 2,) int
-    work."""
+    (at most N − 1): one step without a branch, then the rest (one step: 4.31 against 4.66 µs
+    a call for three, 500 particles, circle-01's weights). start (2N + 2,) int work."""
     n = w.size
     nw, cdf = work[1], work[2]
     k = n - np.int64(_floors(w, _total(w), nw, cdf))
@@ -111,14 +111,12 @@ def _residual(w, s, idx, work, start):
         first[b + 1] += first[b]
     u, top = work[0, :k], cdf[n - 1]
     fill_random(s, u)
-    for j in range(k):  # a bucket holds about one entry, so three steps mostly suffice
+    for j in range(k):  # a bucket holds about one entry: one step, then the rare rest
         v = u[j] * top
         i = first[min(np.int64(u[j] * n), n - 1)]
         if i < 0:  # never (first ≥ 0): an exit that keeps LLVM from vectorising the loop,
-            break  # whose four dependent gathers a draw are slower than loads one at a time
-        for _ in range(3):
-            i += np.int64((i < n) & (cdf[min(i, n - 1)] <= v))
-        pos[j] = i
+            break  # whose dependent gathers are slower than loads one at a time
+        pos[j] = i + np.int64((i < n) & (cdf[min(i, n - 1)] <= v))
     counts = first[:n]
     counts[:] = 0
     for j in range(k):  # the rare rest, and round-off at bucket edges; then count
