@@ -20,10 +20,15 @@ def _normals(r, s, eps, work):
 
 
 @njit
-def _predict_weigh(r, xs, eps, dt, d3, ace, z, cam, dist, w, lw, px):
+def _gather_predict(r, xs, idx, shift, eps, dt, d3, ace, out):
     for _ in range(r):
-        K._predict_and_weigh(xs, eps, 1, dt, d3, d3, ace, z, 1 / 32, cam, dist, w, True, lw,
-                             px)
+        K._gather_predict(xs, idx, shift, eps, 1, dt, d3, d3, ace, out)
+
+
+@njit
+def _weigh(r, xs, z, cam, dist, w, lw, px):
+    for _ in range(r):
+        K._weigh(xs, z, 1 / 32, cam, dist, w, True, lw, px)
 
 
 @njit
@@ -74,19 +79,21 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
     dist = np.array([0.1, -0.05, 0.001, -0.002, 0.01])
     dt, d3, ace = np.full(4, 1 / 30), np.zeros((4, 3)), np.full((4, 3), 1e-3)
     z, w, lw = np.array([320.0, 240.0]), np.full(n, 1 / n), -rng.uniform(0, 5, n)
-    idx, xr = np.empty(n, np.int64), np.empty_like(xs)
+    idx, xr = np.sort(rng.integers(0, n, n)), np.empty_like(xs)  # ancestors: ascending
     work, start = np.empty((3, n)), np.empty(2 * n + 2, np.int64)
     walk, centre = np.r_[np.full(3, 0.005), np.full(3, 0.01)], np.array([0.1, 0.45, 0.32])
     mean, cov = np.empty(6), np.empty((6, 6))
     px = np.ascontiguousarray(np.c_[rng.normal(320, 20, n), rng.normal(240, 20, n)].T)
     cases = [("12 standard normals per particle (SplitMix64, ziggurat)", 1, _normals,
               (s, eps, K.normals_work(eps.size))),
-             ("predict and weigh by the detection (eqs. 10, 11)", 1, _predict_weigh,
-              (xs.copy(), eps, dt, d3, ace, z, cam, dist, w, np.empty(n), np.empty((2, n)))),
+             ("gather the resampled particles and predict (eq. 10)", 1, _gather_predict,
+              (xs, idx, np.full(3, 0.01), eps, dt, d3, ace, xr)),
+             ("weigh by the detection (eq. 11)", 1, _weigh,
+              (xs, z, cam, dist, w, np.empty(n), np.empty((2, n)))),
              ("normalise the weights (exp)", 2, _normalise, (lw, w)),
              ("residual resampling", 2, _resample, (w, s, idx, work, start)),
              ("χ² gate on the predicted pixels", 1, _gate, (px, w, z)),
-             ("gather the resampled particles", 2, _take, (xs, idx, xr, np.zeros(3))),
+             ("gather the resampled particles (step 3)", 1, _take, (xs, idx, xr, np.zeros(3))),
              ("random walk and arm constraint (eqs. 15-18)", 1, _walk,
               (xs.copy(), eps, walk, centre, np.empty(n))),
              ("weighted mean and covariance", 1, _moments, (xs, w, mean, cov, xr))]

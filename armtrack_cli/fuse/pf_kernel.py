@@ -143,19 +143,38 @@ def _pixel(p0, p1, p2, cam, dist):
 
 
 @njit(cache=True, error_model="numpy")
-def _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z, inv2s2, cam, dist, w, uniform, lw, px):
-    """Step 1, x_k ~ N(F x + b, Q) (eq. 10) with Q = L Lᵀ ⊗ I₃ from eps rows 0-5; step 2,
-    lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11) if z is seen, the pixels π(p_i) kept in
-    px (2, N) for the gate. Returns whether z is seen."""
+def _predict(xs, eps, k, dt, dp, dv, ace):
+    """Step 1, x_k ~ N(F x + b, Q) (eq. 10) with Q = L Lᵀ ⊗ I₃ from eps rows 0-5, in place."""
     a, c, e = ace[k, 0], ace[k, 1], ace[k, 2]
+    for j in range(3):
+        dtk, dpj, dvj = dt[k], dp[k, j], dv[k, j]
+        for i in range(xs.shape[1]):
+            p, v = xs[j, i], xs[3 + j, i]
+            xs[j, i] = p + v * dtk + dpj + a * eps[j, i]
+            xs[3 + j, i] = v + dvj + c * eps[j, i] + e * eps[3 + j, i]
+
+
+@njit(cache=True, error_model="numpy")
+def _gather_predict(xs, idx, shift, eps, k, dt, dp, dv, ace, out):
+    """The last frame's resampled particles gathered (out = xs[:, idx], velocities moved by
+    shift (3,) where it is not zero, as pf_resample_kernel._take) and predicted (step 1, as
+    _predict) in one pass: the gathered particle is not stored and read back."""
+    a, c, e = ace[k, 0], ace[k, 1], ace[k, 2]
+    for j in range(3):
+        dtk, dpj, dvj, sj = dt[k], dp[k, j], dv[k, j], shift[j]
+        for i in range(idx.size):
+            p, v = xs[j, idx[i]], xs[3 + j, idx[i]]
+            if sj != 0.0:
+                v = v + sj
+            out[j, i] = p + v * dtk + dpj + a * eps[j, i]
+            out[3 + j, i] = v + dvj + c * eps[j, i] + e * eps[3 + j, i]
+
+
+@njit(cache=True, error_model="numpy")
+def _weigh(xs, z, inv2s2, cam, dist, w, uniform, lw, px):
+    """Step 2, lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11) if z is seen, the pixels π(p_i)
+    kept in px (2, N) for the gate. Returns whether z is seen."""
     n = xs.shape[1]
-    if k > 0:
-        for j in range(3):
-            dtk, dpj, dvj = dt[k], dp[k, j], dv[k, j]
-            for i in range(n):
-                p, v = xs[j, i], xs[3 + j, i]
-                xs[j, i] = p + v * dtk + dpj + a * eps[j, i]
-                xs[3 + j, i] = v + dvj + c * eps[j, i] + e * eps[3 + j, i]
     if not (np.isfinite(z[0]) and np.isfinite(z[1])):
         return False
     ct, dt5, z0, z1 = _camera_tuple(cam), _dist_tuple(dist), z[0], z[1]  # in registers
@@ -321,11 +340,17 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     idx, shift, no_shift = np.empty(N, np.int64), np.zeros(3), np.zeros(3)
     work, start = np.empty((3, N)), np.empty(2 * N + 2, np.int64)
     uniform = True  # every w_i is exactly 1/N
+    gather = False  # the last frame's resampling (idx, shift) not yet gathered
     run_gated, ss = 0, 0.0
     for k in range(n_frames):
         fill_normals_with(state, eps, nwork)  # the reference's eps (12, N)
-        seen = _predict_and_weigh(xs, eps, k, dt, dp, dv, ace, z[k], inv2s2, cam, dist, w,
-                                  uniform, lw, px)
+        if gather:  # step 1 (k > 0) on the particles the last frame resampled
+            _gather_predict(xs, idx, shift, eps, k, dt, dp, dv, ace, xr)
+            xs, xr = xr, xs
+            gather = False
+        elif k > 0:
+            _predict(xs, eps, k, dt, dp, dv, ace)
+        seen = _weigh(xs, z[k], inv2s2, cam, dist, w, uniform, lw, px)
         if seen:  # the χ² gate, roughening and re-seeding
             seen, run_gated, ss = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw,
                                                   px, codes, run_gated, guard, constrained,
@@ -351,8 +376,7 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
             if n_eff[k] >= resample_ess * N:
                 continue
             _resample(w, state, scheme, idx, work, start)
-        _take(xs, idx, xr, shift)
-        xs, xr = xr, xs
+        gather = True  # in the next frame's prediction
         w[:] = 1.0 / N
         uniform = True
     return mean, cov, n_eff, codes
