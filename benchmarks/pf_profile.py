@@ -44,9 +44,9 @@ def _resample(r, w, s, idx, work, start):
 
 
 @njit
-def _take(r, xs, idx, xr, shift):
+def _gather_walk(r, xs, idx, eps, walk, xr):
     for _ in range(r):
-        K._take(xs, idx, xr, shift)
+        K._gather_walk(xs, idx, eps, walk, xr)
 
 
 @njit
@@ -56,9 +56,9 @@ def _gate(r, px, w, z):
 
 
 @njit
-def _walk(r, xs, eps, walk, centre, lw):
+def _constrain(r, xs, centre, lw):
     for _ in range(r):
-        K._walk_and_constrain(xs, eps, walk, centre, 0.31, 5000.0, lw)
+        K._constrain(xs, centre, 0.31, 5000.0, lw)
 
 
 @njit
@@ -93,9 +93,9 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
              ("normalise the weights (exp)", 2, _normalise, (lw, w)),
              ("residual resampling", 2, _resample, (w, s, idx, work, start)),
              ("χ² gate on the predicted pixels", 1, _gate, (px, w, z)),
-             ("gather the resampled particles (step 3)", 1, _take, (xs, idx, xr, np.zeros(3))),
-             ("random walk and arm constraint (eqs. 15-18)", 1, _walk,
-              (xs.copy(), eps, walk, centre, np.empty(n))),
+             ("gather the resampled particles and random walk (eqs. 17, 18)", 1, _gather_walk,
+              (xs, idx, eps, walk, xr)),
+             ("arm constraint (eqs. 15, 16)", 1, _constrain, (xs, centre, np.empty(n))),
              ("weighted mean and covariance", 1, _moments, (xs, w, mean, cov, xr))]
     rows = []
     for name, times, fn, args in cases:

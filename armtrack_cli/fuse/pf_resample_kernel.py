@@ -1,6 +1,7 @@
 """The resampling of the compiled particle filters (fuse/pf_kernel.py): the schemes of
 filters/resampling.py drawing the same uniforms from the same splitmix stream
-(filters/splitmix.py), and the gather of the resampled particles (6, N)."""
+(filters/splitmix.py). The resampled particles are gathered in fuse/pf_kernel.py's passes
+that use them (_gather_predict, _gather_walk)."""
 
 from __future__ import annotations
 
@@ -155,20 +156,6 @@ def _emit(idx, m, i, c):
     for t in range(m + 2, m + c):
         idx[t] = i
     return m + c
-
-
-@njit(cache=True, error_model="numpy")
-def _take(xs, idx, out, shift):
-    """out = xs[:, idx] (the resampled particles, (6, N)), their velocities (rows 3-5) moved
-    by shift (3,) where it is not zero, in the same pass."""
-    for j in range(6):
-        c = shift[j - 3] if j >= 3 else 0.0
-        if c == 0.0:
-            for i in range(idx.size):
-                out[j, i] = xs[j, idx[i]]
-        else:
-            for i in range(idx.size):
-                out[j, i] = xs[j, idx[i]] + c
 
 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
