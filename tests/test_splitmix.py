@@ -49,6 +49,16 @@ def test_kernel_uniforms_are_the_references():
     np.testing.assert_array_equal(a, b)
 
 
+def test_uniforms_float_conversion_is_exact_at_its_edges():
+    """fill_random's float of a 53-bit integer from its two 32-bit halves' bits equals
+    Python's exact int → float where random draws seldom go: 0, the halves' carries, 2⁵² and
+    the largest 53-bit value."""
+    edges = [0, 1, 2**32 - 1, 2**32, 2**32 + 1, 2**52 - 1, 2**52, 2**52 + 1, 2**53 - 2,
+             2**53 - 1, 0x15555555555555]
+    for v in edges:
+        assert splitmix._exact_float(np.uint64(v)) == float(v), v
+
+
 def test_normals_are_standard_normal():
     """Against the closed form: 1.2 million draws, mean, variance, skewness and excess
     kurtosis within 5 standard errors, the mass beyond ±1, ±2, ±3 and ±4 within 5 binomial SDs
