@@ -82,6 +82,8 @@ class FuseSettings:
     accel_bias_walk: float = 0.001  # m/s²/√s, its random walk
     imu_hold: str = "linear"  # IMU between samples: "linear" (first-order hold) or "sample"
     smoother_iterations: int = 10  # Gauss–Newton iterations at most
+    branch_repair: bool = True  # after the first, runs of frames on the wrong ray–sphere root
+    #                            moved to the other where the IMU agrees (fuse/branch_repair.py)
     shoulder: str = "fixed"  # "fixed" (Tao & Hu) or "drifting": shoulder and upper-arm length
     #                          states that start at the declared arm and wander (docs/fusion.md)
     shoulder_sd_m: float = 0.11  # per axis, how far the declared shoulder may be off …
