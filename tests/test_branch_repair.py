@@ -115,3 +115,13 @@ def test_runs_split_where_the_roots_meet_or_nothing_is_seen():
 ])
 def test_converged_stops_on_the_extrapolated_remaining_change(step, previous, stop):
     assert arm_smoother.converged(step, previous) is stop
+
+
+def test_the_setting_is_a_boolean():
+    from armtrack_cli.core.errors import ConfigError
+    from armtrack_cli.pipeline.fuse import settings_for
+
+    assert settings_for(None, ())[0].branch_repair is True
+    assert settings_for(None, ("fuse.branch_repair=false",))[0].branch_repair is False
+    with pytest.raises(ConfigError, match="branch_repair"):
+        settings_for(None, ("fuse.branch_repair=3",))

@@ -134,6 +134,9 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",
                               did_you_mean(value, valid, what="choices"))
+    if not isinstance(s.branch_repair, bool):
+        raise ConfigError(where, f"[fuse] branch_repair = {s.branch_repair!r} is not a boolean",
+                          "use true or false")
     if s.smoother_iterations < 1:
         raise ConfigError(where, f"[fuse] smoother_iterations = {s.smoother_iterations} is too "
                           "few", "use 1 or more")
