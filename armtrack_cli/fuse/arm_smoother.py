@@ -20,7 +20,9 @@ m/s, rad, m/s², rad/s, m (b_g in B); d = 12 (16) without a gyroscope, or orient
     u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
 Each iteration linearises camera and arm about the current smoothed trajectory and runs one
 forward Kalman filter and RTS pass (fuse/smoother_kernel.py); the first trajectory is a robust
-first pass (pf-constraint, RTS-smoothed), so the ray–sphere branch is the particles' choice.
+first pass (pf-constraint, RTS-smoothed), so the ray–sphere branch is first the particles'
+choice; after the first iteration, runs of frames on the wrong one are moved to the other
+where the IMU says so (fuse/branch_repair.py), which Gauss–Newton cannot do by itself.
 """
 
 from __future__ import annotations
