@@ -11,7 +11,9 @@ is well apart is therefore tested as a whole:
   - the window: the run and up to ``margin`` frames either side (the trajectory as it is);
   - the IMU's path over it: the linear process x_k = F_k x_{k−1} + b_k (Tao & Hu eqs. 4–6
     with the orientation error and bias, fuse/imu_fold.py) from the window's first frame,
-    its IMU errors as estimated and p = v = 0: D_k, the double-integrated displacement;
+    its IMU errors as estimated there and p = v = 0: D_k, the double-integrated displacement
+    (the errors stepped by the process, not taken from the trajectory's later frames: over a
+    wrong run those bent to fit it);
   - each hypothesis (the run as it is, the run on the other root) fitted by p_k ≈ p₀ + v₀ τ_k
     + D_k (least squares in p₀, v₀: a start and a velocity the run may have got wrong); its
     RMS residual says how well the IMU agrees with it.
@@ -94,7 +96,7 @@ def candidates(p: np.ndarray, points: np.ndarray,
 
 def moved(p: np.ndarray, points: np.ndarray, code: np.ndarray, lo: int, hi: int,
           root: int) -> np.ndarray:
-    """Positions p (n, 3) with the stretch lo … hi − 1 moved off ``root``: its frames on that
+    """Positions p (m, 3) with the stretch lo … hi − 1 moved off ``root``: its frames on that
     root (``code``, roots_of's) to the other, its grazing frames to the middle of the two
     roots (where the ray passes nearest the sphere's surface); the rest as they are."""
     q = p.copy()
@@ -153,7 +155,7 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
         """The other root's misfit over stretch i's window against its own."""
         (lo, hi, r), (a, e) = cands[i], windows[i]
         here = X[a:e, :3]
-        there = moved(X[:, :3], points, code, lo, hi, r)[a:e]
+        there = moved(here, points[a:e], code[a:e], lo - a, hi - a, r)
         return misfit(there, *paths[i]) / max(misfit(here, *paths[i]), 1e-300)
 
     ratios = np.array([test(i) for i in range(len(cands))])
