@@ -122,12 +122,12 @@ def test_converged_smoother_is_ten_iterations_within_the_step_tolerance(sessions
                                                                         monkeypatch):
     """Gauss–Newton stopped by arm_smoother.converged equals it run for all of
     smoother_iterations = 10 (no rule stopping it) to STEP_TOL_M (10 µm) in every wrist
-    position and SD: ten times the micrometre its predicted next step is allowed."""
+    position and SD: twice the 5 µm of change the rule lets remain."""
     from armtrack_cli.fuse import arm_smoother
 
     got, _ = _smoothed(*sessions[name])
     tol = arm_smoother.STEP_TOL_M
-    monkeypatch.setattr(arm_smoother, "STEP_TOL_M", 0.0)  # neither rule can stop it now
+    monkeypatch.setattr(arm_smoother, "GN_STEP_M", 0.0)  # the rule cannot stop it now
     ten, _ = _smoothed(*sessions[name])
     assert ten.summary["smoother_iterations"] == 10 > got.summary["smoother_iterations"]
     assert np.abs(got.mean[:, :3] - ten.mean[:, :3]).max() < tol

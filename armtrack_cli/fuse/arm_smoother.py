@@ -20,7 +20,9 @@ m/s, rad, m/s², rad/s, m (b_g in B); d = 12 (16) without a gyroscope, or orient
     u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
 Each iteration linearises camera and arm about the current smoothed trajectory and runs one
 forward Kalman filter and RTS pass (fuse/smoother_kernel.py); the first trajectory is a robust
-first pass (pf-constraint, RTS-smoothed), so the ray–sphere branch is the particles' choice.
+first pass (pf-constraint, RTS-smoothed), so the ray–sphere branch is first the particles'
+choice; after the first iteration, runs of frames on the wrong one are moved to the other
+where the IMU says so (fuse/branch_repair.py), which Gauss–Newton cannot do by itself.
 """
 
 from __future__ import annotations
@@ -30,25 +32,29 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse import camera_pose, imu_fold, rest
+from armtrack_cli.fuse import branch_repair, camera_pose, imu_fold, rest, robust
 from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
 
 P_, V_, TH, BA, BG = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15)
-STEP_TOL_M = 1e-5  # Gauss–Newton has converged when no wrist position moves more than this,
-NEXT_TOL_M = 1e-6  # or when the next iteration, predicted from the last two, would move none
-#                    more than this (``converged``)
+STEP_TOL_M = 1e-5  # a step that moves no wrist position more than this is converged (the
+#                    iterated passes of fuse/imu_error.py and fuse/arm_refine.py stop there)
+GN_STEP_M = 1e-3  # Gauss–Newton may stop once no wrist position moved more than this …
+REMAINING_M = 5e-6  # … and the change still to come, extrapolated, is below this (``converged``)
 
 
 def converged(step: float, previous: float) -> bool:
     """Whether Gauss–Newton may stop after an iteration that moved no wrist position more than
-    ``step`` m, the one before it ``previous`` m: below STEP_TOL_M; or below 10 × STEP_TOL_M
-    with the next step, at the same rate of convergence (step / previous), below NEXT_TOL_M.
-    Its convergence here is near quadratic (3 mm, 28 µm, 0.75 µm, 20 nm on the 10-minute bench
-    session: rates 0.009, 0.027): the second rule stops one iteration before the first, the
-    trajectory within about a micrometre of the one after more (tests/test_arm_smoother.py)."""
-    return step < STEP_TOL_M or (step < 10 * STEP_TOL_M and step * step < NEXT_TOL_M * previous)
+    ``step`` m, the one before it ``previous`` m: the step below GN_STEP_M and the change
+    still to come, the geometric series of steps shrinking at the rate r = step / previous,
+    step · r / (1 − r) = step² / (previous − step), below REMAINING_M. Its convergence here
+    is near quadratic (3 mm, 28 µm, 0.75 µm, 20 nm on the 10-minute bench session: rates
+    0.009, 0.027), so this stops after the 28 µm step, the trajectory within about a
+    micrometre of the one after more (tests/test_fuse_compare.py); never after the first
+    (no rate yet) nor after a step no smaller than the one before."""
+    return bool(step < GN_STEP_M and np.isfinite(previous) and previous > step
+                and step * step < REMAINING_M * (previous - step))
 
 
 @dataclass(frozen=True)
@@ -74,6 +80,7 @@ class Smoothed:
     gated: np.ndarray  # (n,) bool, detections not used
     iterations: int
     gyro: bool  # δθ tracked by the gyroscope (state holds b_g) or Gauss–Markov
+    runs_moved: int = 0  # runs of frames moved to the other ray–sphere root (branch_repair)
 
 
 DRIFT = 4  # the drifting arm's states, the state's last: ℓ (m), then S (3, m in W)
@@ -279,12 +286,12 @@ def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
     still = resting(imu, t_frames, z, s, m_pre)
-    X, var, elbow_var, gated, iterations = _iterate(fd, track, period, (m0, Pm0), X, z, q_hat,
-                                                    proj, s, arm, shoulder, use_c, use_k, still,
-                                                    camera)
+    X, var, elbow_var, gated, iterations, moved = _iterate(
+        fd, track, period, (m0, Pm0), X, z, q_hat, proj, s, arm, shoulder, use_c, use_k, still,
+        camera)
     X, q_hat = X[m_pre:], q_hat[m_pre:]  # the video's frames
     return Smoothed(X, var[m_pre:], corrected(q_hat, X[:, TH]), elbow_var[m_pre:],
-                    gated[m_pre:], iterations, gyro)
+                    gated[m_pre:], iterations, gyro, moved)
 
 
 def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
@@ -293,13 +300,14 @@ def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use
     equal to the plain pass, memory flat in the session's length): the model built a block of
     frames at a time, with the zero-velocity rows of its resting frames (``still``,
     fuse/rest.py) inserted, and only the (p, v) and elbow variances kept (a covariance per
-    frame would be 0.4 KB of every frame's 0.6 KB). Returns X, the (p, v) and elbow
-    variances, the gated detections and the iterations run."""
+    frame would be 0.4 KB of every frame's 0.6 KB). After the first iteration, runs of frames
+    on the wrong ray–sphere root are moved to the other (``repaired``). Returns X, the (p, v)
+    and elbow variances, the gated detections, the iterations run and the runs moved."""
     n = X.shape[0]
     sh_fixed = None if shoulder is not None else arm.shoulder
     rk = s.constraint_sigma_m**2
     var, elbow_var = np.empty((n, 6)), np.empty((n, 3))
-    iterations, step, previous, gated = 0, np.inf, np.inf, np.zeros(n, bool)
+    iterations, step, previous, gated, moved = 0, np.inf, np.inf, np.zeros(n, bool), 0
     while iterations < s.smoother_iterations and not converged(step, previous):
         Xn = np.empty_like(X)
 
@@ -327,7 +335,23 @@ def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use
                                keep=keep)
         previous, step = step, np.abs(Xn[:, P_] - X[:, P_]).max()
         X, iterations = Xn, iterations + 1
-    return X, var, elbow_var, gated, iterations
+        if iterations == 1 < s.smoother_iterations and s.branch_repair and shoulder is None:
+            X, moved = repaired(X, z, q_hat, proj, arm, camera,
+                                lambda lo, hi: process(_rows(fd, lo, hi), s, None, period,
+                                                       None if track is None
+                                                       else _rows(track, lo, hi), camera)[:2])
+    return X, var, elbow_var, gated, iterations, moved
+
+
+def repaired(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, arm: Arm,
+             camera: bool, steps: branch_repair.Steps) -> tuple[np.ndarray, int]:
+    """branch_repair.repair on the trajectory X (n, d) of the paper's fixed shoulder: the
+    roots of each detection's ray (through the camera as X corrects it, ``camera``) on the
+    sphere of the orientation X corrects; (X repaired, the runs moved)."""
+    if camera:
+        proj = camera_pose.moved(proj, X[:, camera_slice(X.shape[1], False)].mean(axis=0))
+    points = robust.ray_sphere_points(proj, arm, z, corrected(q_hat, X[:, TH]))
+    return branch_repair.repair(X, points, steps)
 
 
 def _rows(a, lo: int, hi: int):

@@ -82,6 +82,8 @@ class FuseSettings:
     accel_bias_walk: float = 0.001  # m/s²/√s, its random walk
     imu_hold: str = "linear"  # IMU between samples: "linear" (first-order hold) or "sample"
     smoother_iterations: int = 10  # Gauss–Newton iterations at most
+    branch_repair: bool = True  # after the first, runs of frames on the wrong ray–sphere root
+    #                            moved to the other where the IMU agrees (fuse/branch_repair.py)
     shoulder: str = "fixed"  # "fixed" (Tao & Hu) or "drifting": shoulder and upper-arm length
     #                          states that start at the declared arm and wander (docs/fusion.md)
     shoulder_sd_m: float = 0.11  # per axis, how far the declared shoulder may be off …
@@ -132,6 +134,9 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
         if value not in valid:
             raise ConfigError(where, f"[fuse] {key} = {value!r} is not one of {', '.join(valid)}",
                               did_you_mean(value, valid, what="choices"))
+    if not isinstance(s.branch_repair, bool):
+        raise ConfigError(where, f"[fuse] branch_repair = {s.branch_repair!r} is not a boolean",
+                          "use true or false")
     if s.smoother_iterations < 1:
         raise ConfigError(where, f"[fuse] smoother_iterations = {s.smoother_iterations} is too "
                           "few", "use 1 or more")

@@ -1,0 +1,173 @@
+"""Runs of frames on the wrong ray–sphere root, found and moved to the other (issue 14).
+
+The detection's camera ray meets the wrist's sphere (|p − (S + L2 R u)| = L1, Tao & Hu eq. 15)
+at two points (robust.ray_sphere_points). Camera and arm are satisfied at either, so a
+trajectory that sits on the wrong one for a run of frames is a local minimum of the arm
+smoother's least squares: Gauss–Newton, linearised there, stays there. Only the IMU tells the
+roots apart, through the path between them. A true wrist changes root only where the two
+meet (the ray tangent to the sphere) or unseen; a run of frames on one root whose other root
+is well apart is therefore tested as a whole:
+
+  - the window: the run and up to ``margin`` frames either side (the trajectory as it is);
+  - the IMU's path over it: the linear process x_k = F_k x_{k−1} + b_k (Tao & Hu eqs. 4–6
+    with the orientation error and bias, fuse/imu_fold.py) from the window's first frame,
+    its IMU errors as estimated there and p = v = 0: D_k, the double-integrated displacement
+    (the errors stepped by the process, not taken from the trajectory's later frames: over a
+    wrong run those bent to fit it);
+  - each hypothesis (the run as it is, the run on the other root) fitted by p_k ≈ p₀ + v₀ τ_k
+    + D_k (least squares in p₀, v₀: a start and a velocity the run may have got wrong); its
+    RMS residual says how well the IMU agrees with it.
+
+A run is moved when the other root's residual is below ``ratio`` times its own, the clearest
+case first (``repair``); so is a chain of runs on the same root cut only by frames where the
+ray grazes the sphere (``candidates``). A wrong
+run bends the path by the roots' gap (centimetres to decimetres) where the IMU's error over a
+second or two is millimetres, so the ratio is far from 1 either way. The arm smoother
+(fuse/arm_smoother.py) does this once, after its first iteration (whose orientation error and
+bias make the spheres and the IMU's path right), and goes on from the repaired trajectory.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+MIN_GAP_M = 0.02  # the roots this far apart at least on every frame of a run: nearer, the ray
+#                   grazes the sphere and either root is about as good
+MARGIN = 15  # frames either side of a run in its window (0.5 s at 30 fps)
+RATIO = 0.8  # move a run when the other root's residual is below this times its own
+MIN_FRAMES = 3  # shorter runs are left alone (a frame or two the next iteration decides)
+GRAZING, UNSEEN = -1, -2  # roots_of's codes: roots nearer than MIN_GAP_M, no detection
+
+# steps(lo, hi) -> (F (hi − lo, d, d), b (hi − lo, d)): the process steps into frames lo … hi − 1
+Steps = Callable[[int, int], tuple[np.ndarray, np.ndarray]]
+
+
+def roots_of(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M) -> np.ndarray:
+    """(n,) the root (0, 1) nearer each position p (n, 3) where the roots points (n, 2, 3)
+    are at least min_gap_m apart; GRAZING where they are nearer, UNSEEN where there are none
+    (no detection)."""
+    gap = np.linalg.norm(points[:, 0] - points[:, 1], axis=1)
+    d = np.linalg.norm(p[:, None, :] - points, axis=2)
+    root = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
+    return np.where(~np.isfinite(gap), UNSEEN, np.where(gap < min_gap_m, GRAZING, root))
+
+
+def branch_runs(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M,
+                min_frames: int = MIN_FRAMES) -> list[tuple[int, int, int]]:
+    """(lo, hi, root) for each run of frames lo … hi − 1 whose positions p (n, 3) sit nearer
+    the same root points[:, root] (points (n, 2, 3), NaN: no detection) while the two roots
+    are at least min_gap_m apart; runs of fewer than min_frames frames left out."""
+    root = roots_of(p, points, min_gap_m)
+    edges = np.flatnonzero(np.diff(np.r_[UNSEEN, root, UNSEEN]) != 0)  # where runs start, end
+    return [(int(lo), int(hi), int(root[lo])) for lo, hi in zip(edges[:-1], edges[1:])
+            if root[lo] >= 0 and hi - lo >= min_frames]
+
+
+def candidates(p: np.ndarray, points: np.ndarray,
+               min_gap_m: float = MIN_GAP_M) -> list[tuple[int, int, int]]:
+    """The stretches (lo, hi, root) that ``repair`` tests: every run (``branch_runs``), and
+    every chain of two or more runs on the same root with only grazing frames between them
+    (a path that stays on one root while the ray nearly touches the sphere: the wrist need not
+    have changed root there, and a wrong stretch is often cut so into short pieces); each
+    with the grazing frames that border it, which a path leaving the wrong root crosses."""
+    runs = branch_runs(p, points, min_gap_m, min_frames=1)
+    root = roots_of(p, points, min_gap_m)
+    spans = [r for r in runs if r[1] - r[0] >= MIN_FRAMES]
+    i = 0
+    while i < len(runs):
+        j = i
+        while (j + 1 < len(runs) and runs[j + 1][2] == runs[i][2]
+               and (root[runs[j][1]:runs[j + 1][0]] == GRAZING).all()):
+            j += 1
+        if j > i:
+            spans.append((runs[i][0], runs[j][1], runs[i][2]))
+        i = j + 1
+    out = []
+    for lo, hi, r in spans:
+        while lo > 0 and root[lo - 1] == GRAZING:
+            lo -= 1
+        while hi < root.size and root[hi] == GRAZING:
+            hi += 1
+        out.append((lo, hi, r))
+    return out
+
+
+def moved(p: np.ndarray, points: np.ndarray, code: np.ndarray, lo: int, hi: int,
+          root: int) -> np.ndarray:
+    """Positions p (m, 3) with the stretch lo … hi − 1 moved off ``root``: its frames on that
+    root (``code``, roots_of's) to the other, its grazing frames to the middle of the two
+    roots (where the ray passes nearest the sphere's surface); the rest as they are."""
+    q = p.copy()
+    on = np.flatnonzero(code[lo:hi] == root) + lo
+    q[on] = points[on, 1 - root]
+    graze = np.flatnonzero(code[lo:hi] == GRAZING) + lo
+    q[graze] = points[graze].mean(axis=1)
+    return q
+
+
+def imu_path(F: np.ndarray, b: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(D (m + 1, 3), τ (m + 1,)): the displacement from the state x (d,) with p = v = 0 over
+    the steps F (m, d, d), b (m, d) (its IMU errors as x holds them), and the time since it
+    (F's ∂p/∂v block is Δ I)."""
+    x = np.array(x, float)
+    x[:6] = 0.0
+    D = np.zeros((F.shape[0] + 1, 3))
+    for j in range(F.shape[0]):
+        x = F[j] @ x + b[j]
+        D[j + 1] = x[:3]
+    return D, np.r_[0.0, np.cumsum(F[:, 0, 3])]
+
+
+def misfit(P: np.ndarray, D: np.ndarray, tau: np.ndarray) -> float:
+    """RMS (m) of P (m, 3) − D − (p₀ + v₀ τ) with p₀, v₀ fitted by least squares."""
+    A = np.c_[np.ones_like(tau), tau]
+    Y = P - D
+    coef = np.linalg.lstsq(A, Y, rcond=None)[0]
+    return float(np.sqrt(np.mean(np.sum((Y - A @ coef) ** 2, axis=1))))
+
+
+def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float = MIN_GAP_M,
+           margin: int = MARGIN, ratio: float = RATIO) -> tuple[np.ndarray, int]:
+    """(X with its wrongly rooted stretches moved to the other root, how many moved) for the
+    trajectory X (n, d) (p its first three columns, the IMU's errors in the rest as the
+    process ``steps`` takes them) and the roots ``points`` (n, 2, 3); a stretch moves as
+    ``moved`` says.
+
+    Greedy, the clearest first: a stretch's window reaches into its neighbours, so a right
+    one beside a wrong one sees a path half on each root either way; the wrong one, between
+    right ones, sees the IMU agree with the other root on its whole window, the smallest
+    ratio of all. So the stretch of smallest ratio (below ``ratio``) moves, those that
+    share frames off the grazing ones with it are dropped, those whose windows reach it are
+    tested again, and so on."""
+    n = X.shape[0]
+    X = X.copy()
+    cands = candidates(X[:, :3], points, min_gap_m)
+    code = roots_of(X[:, :3], points, min_gap_m)
+    windows = [(max(lo - margin, 0), min(hi + margin, n)) for lo, hi, _ in cands]
+    paths = []
+    for a, e in windows:  # the IMU's path over each window: the same whichever root
+        F, b = steps(a + 1, e)
+        paths.append(imu_path(F, b, X[a]))
+
+    def test(i: int) -> float:
+        """The other root's misfit over stretch i's window against its own."""
+        (lo, hi, r), (a, e) = cands[i], windows[i]
+        here = X[a:e, :3]
+        there = moved(here, points[a:e], code[a:e], lo - a, hi - a, r)
+        return misfit(there, *paths[i]) / max(misfit(here, *paths[i]), 1e-300)
+
+    ratios = np.array([test(i) for i in range(len(cands))])
+    count = 0
+    while ratios.size and ratios.min() < ratio:
+        lo, hi, r = cands[int(np.argmin(ratios))]
+        X[:, :3] = moved(X[:, :3], points, code, lo, hi, r)
+        code[lo:hi] = np.where(code[lo:hi] == r, 1 - r, code[lo:hi])
+        count += 1
+        for j, (lj, hj, rj) in enumerate(cands):
+            if (code[lj:hj] == 1 - rj).any():  # some of its own frames moved (itself too)
+                ratios[j] = np.inf
+            elif np.isfinite(ratios[j]) and windows[j][0] < hi and windows[j][1] > lo:
+                ratios[j] = test(j)  # its window reaches it
+    return X, count

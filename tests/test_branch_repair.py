@@ -1,0 +1,144 @@
+"""fuse/branch_repair.py on a constructed wrist whose truth is known: a camera at the origin, a
+sphere of radius L1 about a moving centre, the wrist on it, its path the exact double
+integral of a piecewise-constant acceleration (the process steps), and each frame's two roots
+of the ray through the wrist in closed form (their depths sum to −2 d·(o − c)). Also the
+arm smoother's stopping rule (arm_smoother.converged) on step sequences worked by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armtrack_cli.fuse import arm_smoother, branch_repair
+
+N, DT, L1 = 240, 1 / 30, 0.3
+
+
+def _session(accel_error: float = 0.0, seed: int = 3):
+    """(truth p (N, 3), roots (N, 2, 3) with root 0 the truth, F, b of the (p, v) process)
+    whose IMU acceleration is the truth's plus a constant error of accel_error m/s² and white
+    noise of 0.05 m/s² (seeded)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(N) * DT
+    amp, om = np.array([0.15, 0.1, 0.08]), np.array([2.1, 1.7, 3.3])
+    a = -amp * om**2 * np.sin(om * t[:, None])  # about p₀ + amp sin(ω t)
+    p, v = np.zeros((N, 3)), np.zeros((N, 3))
+    p[0], v[0] = [0.1, -0.05, 1.0], amp * om
+    for k in range(1, N):  # exact for an acceleration held over each step
+        v[k] = v[k - 1] + a[k] * DT
+        p[k] = p[k - 1] + v[k - 1] * DT + a[k] * DT**2 / 2
+    centre = p - L1 * _towards_camera(p, t)
+    d = p / np.linalg.norm(p, axis=1, keepdims=True)  # the ray from the camera at 0
+    s_true = np.linalg.norm(p, axis=1)
+    s_other = -2 * np.sum(d * -centre, axis=1) - s_true
+    roots = np.stack([p, s_other[:, None] * d], axis=1)
+    F = np.tile(np.eye(6), (N, 1, 1))
+    F[:, :3, 3:] = DT * np.eye(3)
+    am = a + accel_error + 0.05 * rng.standard_normal((N, 3))
+    b = np.c_[am * DT**2 / 2, am * DT]
+    return p, roots, F, b
+
+
+def _towards_camera(p, t):
+    """(N, 3) unit: from the sphere's centre to the wrist, mostly towards the camera."""
+    w = -p / np.linalg.norm(p, axis=1, keepdims=True) + np.c_[0.3 * np.sin(t),
+                                                              0.2 * np.cos(0.7 * t), 0 * t]
+    return w / np.linalg.norm(w, axis=1, keepdims=True)
+
+
+def _steps(F, b):
+    return lambda lo, hi: (F[lo:hi], b[lo:hi])
+
+
+def test_constructed_roots_lie_on_the_sphere_apart():
+    p, roots, _, _ = _session()
+    centre = p - L1 * _towards_camera(p, np.arange(N) * DT)
+    for r in (0, 1):
+        assert np.allclose(np.linalg.norm(roots[:, r] - centre, axis=1), L1, atol=1e-12)
+    assert np.linalg.norm(roots[:, 1] - roots[:, 0], axis=1).min() > 0.2
+
+
+def test_imu_path_is_the_double_integral():
+    p, _, F, b = _session(accel_error=0.0)
+    D, tau = branch_repair.imu_path(F[41:101], b[41:101], np.r_[p[40], np.zeros(3)])
+    assert np.allclose(tau, np.arange(61) * DT, atol=1e-12)
+    assert np.array_equal(D[0], np.zeros(3))
+    # with velocity and start removed, the truth's path is the IMU's (up to its noise)
+    assert branch_repair.misfit(p[40:101], D, tau) < 2e-3
+
+
+def test_imu_path_steps_the_errors_from_the_start():
+    """A state (p, v, b) with an accelerometer bias b that the process steps (here a random
+    walk's mean: constant): the path equals p, v stepped by x_k = F_k x_{k−1} + b_k from
+    p = v = 0 and the start's b, whatever p and v the start held."""
+    rng = np.random.default_rng(5)
+    m = 50
+    F = np.tile(np.eye(9), (m, 1, 1))
+    F[:, :3, 3:6] = DT * np.eye(3)
+    F[:, :3, 6:], F[:, 3:6, 6:] = -DT**2 / 2 * np.eye(3), -DT * np.eye(3)
+    b = np.c_[rng.normal(size=(m, 6)) * 1e-3, np.zeros((m, 3))]
+    x0 = np.r_[rng.normal(size=6), 0.03, -0.02, 0.01]
+    ref, pv = np.zeros((m + 1, 3)), np.zeros(6)
+    for k in range(m):
+        pv = pv + np.r_[DT * pv[3:] - DT**2 / 2 * x0[6:], -DT * x0[6:]] + b[k, :6]
+        ref[k + 1] = pv[:3]
+    D, _ = branch_repair.imu_path(F, b, x0)
+    assert np.abs(D - ref).max() < 1e-12
+
+
+@pytest.mark.parametrize("accel_error", [0.0, 0.03])
+@pytest.mark.parametrize("lo, hi", [(100, 160), (0, 60), (200, N), (120, 126)])
+def test_a_run_put_on_the_wrong_root_is_moved_back(accel_error, lo, hi):
+    """In the middle (2 s), at either end, or 6 frames: moved back, alone."""
+    p, roots, F, b = _session(accel_error)
+    X = np.c_[p, np.zeros((N, 3))]
+    X[lo:hi, :3] = roots[lo:hi, 1]
+    got, moved = branch_repair.repair(X, roots, _steps(F, b))
+    assert moved == 1
+    assert np.abs(got[:, :3] - p).max() < 1e-12
+
+
+@pytest.mark.parametrize("accel_error", [0.0, 0.03])
+def test_runs_on_the_right_root_are_not_moved(accel_error):
+    p, roots, F, b = _session(accel_error)
+    X = np.c_[p, np.zeros((N, 3))]
+    got, moved = branch_repair.repair(X, roots, _steps(F, b))
+    assert moved == 0
+    assert np.array_equal(got, X)
+
+
+def test_runs_split_where_the_roots_meet_or_nothing_is_seen():
+    p, roots, _, _ = _session()
+    roots = roots.copy()
+    roots[50:53, 1] = roots[50:53, 0] + 0.005  # the ray grazes the sphere: roots 5 mm apart
+    roots[120:125] = np.nan  # no detection
+    X = p.copy()
+    X[130:200] = roots[130:200, 1]
+    runs = branch_repair.branch_runs(X, roots)
+    assert runs == [(0, 50, 0), (53, 120, 0), (125, 130, 0), (130, 200, 1), (200, N, 0)]
+    assert branch_repair.branch_runs(X, roots, min_frames=6) == [(0, 50, 0), (53, 120, 0),
+                                                                 (130, 200, 1), (200, N, 0)]
+
+
+@pytest.mark.parametrize("step, previous, stop", [
+    (28e-6, 3e-3, True),  # 28² / (3000 − 28) µm = 0.26 µm left
+    (0.75e-6, 28e-6, True),
+    (2e-3, 1e-1, False),  # a step of 2 mm: not yet
+    (9e-4, 1e-3, False),  # 0.9² / 0.1 mm = 8.1 mm left
+    (1e-4, 2.2e-3, True),  # 100² / 2100 µm = 4.8 µm left
+    (1e-4, 1.9e-3, False),  # 100² / 1800 µm = 5.6 µm
+    (5e-4, np.inf, False),  # the first iteration: no rate yet
+    (5e-6, 4e-6, False),  # not shrinking
+])
+def test_converged_stops_on_the_extrapolated_remaining_change(step, previous, stop):
+    assert arm_smoother.converged(step, previous) is stop
+
+
+def test_the_setting_is_a_boolean():
+    from armtrack_cli.core.errors import ConfigError
+    from armtrack_cli.pipeline.fuse import settings_for
+
+    assert settings_for(None, ())[0].branch_repair is True
+    assert settings_for(None, ("fuse.branch_repair=false",))[0].branch_repair is False
+    with pytest.raises(ConfigError, match="branch_repair"):
+        settings_for(None, ("fuse.branch_repair=3",))
