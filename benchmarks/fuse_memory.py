@@ -1,7 +1,7 @@
 """Where fuse's resident memory goes: `python benchmarks/fuse_memory.py SESSION [STAGE]` runs
 pipeline.fuse(SESSION) (the default method; the session calibrated and detected), or
-pipeline.STAGE(SESSION) (compare: the session fused; run: every stage, into the session's
-work folder), in this process while a thread samples resident memory every 20 ms with the
+pipeline.STAGE(SESSION) (compare: the session fused; run: calibrate to compare, as `make
+bench` runs it, into the session's work folder), in this process while a thread samples resident memory every 20 ms with the
 armtrack frames the main thread is in, then prints the peak (VmHWM), the rises of the
 timeline by phase, and the stack at the highest sample: what is live at the peak (issue 15;
 benchmarks/run.py's end-to-end rows give the stage's peak as `make bench` measures it).
@@ -74,7 +74,7 @@ def main() -> None:
 
     args = [a for a in sys.argv[1:] if a != "-v"]
     stage = args[1] if len(args) > 1 else "fuse"
-    getattr(pipeline, stage)(args[0])
+    getattr(pipeline, stage)(args[0], **({"through": "compare"} if stage == "run" else {}))
     done.set()
     end = _status()
     print(f"{stage} {args[0]}: {time.perf_counter() - t0:.1f} s, VmHWM {end['VmHWM']:.0f} MB; "
