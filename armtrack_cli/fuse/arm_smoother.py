@@ -310,42 +310,53 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
     fuse/rest.py) inserted, and only the (p, v) and elbow variances kept (a covariance per
     frame would be 0.4 KB of every frame's 0.6 KB). Returns X, the (p, v) and elbow
     variances, the gated detections and the iterations run. ``start``: [the first
-    trajectory], emptied: it is freed once the first iteration is done with it."""
-    X = _given(start)
+    trajectory], emptied: each pass writes its smoothed states over it as it goes, so one
+    (n, d) trajectory is held, not two."""
+    X = _given(start)  # each pass's smoothed states written over it, block by block
     n = X.shape[0]
     sh_fixed = None if shoulder is not None else arm.shoulder
     rk = s.constraint_sigma_m**2
     var, elbow_var = np.empty((n, 6)), np.empty((n, 3))
     iterations, step, previous, gated = 0, np.inf, np.inf, np.zeros(n, bool)
     while iterations < s.smoother_iterations and not converged(step, previous):
-        Xn = np.empty_like(X)
+        was, moved = {}, []  # a block's first row before this pass wrote it; each block's move
 
-        def model(lo: int, hi: int, X=X, steps_only: bool = False) -> tuple:
+        def model(lo: int, hi: int, steps_only: bool = False, was=was) -> tuple:
             """The steps and rows of frames lo … hi − 1 (the steps alone: steps_only)."""
             F, b, Q = process(_rows(fd, lo, hi), s, shoulder, period,
                               None if track is None else _rows(track, lo, hi), camera)
             if steps_only:
                 ins = rest.steps_with_rows(still[lo:hi], F, b, Q)
                 return ins.arrays if not still[lo:hi].any() else (*ins.arrays, ins.real)
-            Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed,
-                                       camera)
+            Hc, zc, Hk, zk = linearise(_before(X, was, lo, hi), z[lo:hi], q_hat[lo:hi], proj,
+                                       arm, sh_fixed, camera)
             arrays = (F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi])
             if not still[lo:hi].any():
                 return arrays
             ins = rest.with_rows(still[lo:hi], s.rest_velocity_sd_m_s, rk, *arrays)
             return (*ins.arrays, ins.real)
 
-        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, Xn=Xn) -> None:
-            Xn[lo:hi], var[lo:hi] = xs, np.diagonal(Ps[:, :6, :6], axis1=1, axis2=2)
+        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, was=was, moved=moved) -> None:
+            was[lo] = X[lo].copy()
+            moved.append(np.abs(xs[:, P_] - X[lo:hi, P_]).max())
+            X[lo:hi], var[lo:hi] = xs, np.diagonal(Ps[:, :6, :6], axis1=1, axis2=2)
             elbow_var[lo:hi] = np.diagonal(_elbow_cov(q_hat[lo:hi], xs, Ps, arm), axis1=1, axis2=2)
 
         gated = smooth_blocked(*prior_, model, n, rc=s.pixel_sigma**2, rk=rk,
                                gate=float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf,  # 0: off
                                keep=keep)
-        previous, step = step, np.abs(Xn[:, P_] - X[:, P_]).max()
-        del model, keep  # they hold X and Xn: the next iteration's Xn beside two, not three
-        X, iterations = Xn, iterations + 1
+        previous, step = step, np.max(moved)
+        iterations += 1
     return X, var, elbow_var, gated, iterations
+
+
+def _before(X: np.ndarray, was: dict, lo: int, hi: int) -> np.ndarray:
+    """X's rows lo … hi − 1 as the pass found them: the backward pass (smoother_blocks.py)
+    linearises a block with the next block's first frame, which it has just written (``was``
+    holds that row as it was)."""
+    if hi - 1 not in was:
+        return X[lo:hi]
+    return np.concatenate([X[lo:hi - 1], was[hi - 1][None]])
 
 
 def _rows(a, lo: int, hi: int):
