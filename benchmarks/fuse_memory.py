@@ -1,10 +1,11 @@
-"""Where fuse's resident memory goes: `python benchmarks/fuse_memory.py SESSION [STAGE]` runs
-pipeline.fuse(SESSION) (the default method; the session calibrated and detected), or
-pipeline.STAGE(SESSION) (compare: the session fused; run: calibrate to compare, as `make
-bench` runs it, into the session's work folder), in this process while a thread samples resident memory every 20 ms with the
-armtrack frames the main thread is in, then prints the peak (VmHWM), the rises of the
-timeline by phase, and the stack at the highest sample: what is live at the peak (issue 15;
-benchmarks/run.py's end-to-end rows give the stage's peak as `make bench` measures it).
+"""Where fuse's resident memory goes: `python benchmarks/fuse_memory.py SESSION [STAGE] [-v]`
+runs pipeline.fuse(SESSION) (the default method; the session calibrated and detected), or
+pipeline.STAGE(SESSION) (compare: the session fused; run: calibrate to compare, as `make bench`
+runs it, into the session's work folder), in this process while a thread samples resident
+memory every 20 ms with the armtrack frames the main thread is in, then prints the peak
+(VmHWM), the phases with their highest memory (-v: every rise of the timeline too), and the
+stack at the highest sample: what is live at the peak (issue 15; benchmarks/run.py's
+end-to-end rows give the stage's peak as `make bench` measures it).
 
 Resident memory is split as /proc/self/status does: RssAnon (the heap and numpy's arrays:
 the data) and RssFile (the pages of the libraries' files, mapped as they are imported; a

@@ -27,10 +27,12 @@ def resolve_recipe(recipe: str | None, sets: tuple[str, ...]) -> tuple[dict[str,
 
 
 def release_memory() -> None:
-    """What a finished stage freed, handed back to the system before the next stage starts,
-    so that in one process the stages' peaks do not add up (issue 15): the reference cycles
-    Python has not collected yet, and glibc's free pages (malloc_trim, every arena's: the
-    decoding thread's arena otherwise keeps the pages its frames had). A no-op without glibc."""
+    """What a finished stage (or a phase of one: fuse's reading, its method) freed, handed
+    back to the system before the next starts, so that in one process their peaks do not add
+    up (issue 15): the reference cycles Python has not collected yet, and glibc's free pages
+    (malloc_trim, every arena's: the decoding thread's arena otherwise keeps the pages its
+    frames had; freed arrays inside the heap stay resident until trimmed). A no-op without
+    glibc."""
     import ctypes
     import gc
 

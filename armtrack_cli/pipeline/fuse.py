@@ -190,7 +190,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     n, summary, offset = int(p.frames.size), est.summary or {}, p.imu_offset
     used = int(np.isfinite(inp.z).all(axis=1).sum())
     del est, p, inp  # the filter's per-frame arrays, before the measures' draws
-    release_memory()
+    release_memory()  # … and their pages
     _write(dest, s.method, table, session, q_WB, settings, auto)
     return {"method": s.method, "trajectory": str(dest / name), "frames": n,
             "detections_used": used,
