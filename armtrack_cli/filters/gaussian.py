@@ -143,7 +143,7 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
 
 def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
                b: np.ndarray | None = None, Q: np.ndarray | None = None, *, steps=None,
-               block: int = 4096, means_only: bool = False
+               block: int = 4096, means_only: bool = False, P_add: np.ndarray | float = 0.0
                ) -> tuple[np.ndarray, np.ndarray | None]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
@@ -157,24 +157,26 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
     P^s_k = P_k + gain_k (P^s_{k+1} − P⁻_{k+1}) gain_kᵀ (Rauch, Tung & Striebel 1965).
     Instead of F, b, Q: ``steps(lo, hi)`` giving their rows [lo, hi), one block at a time, so
     that they are never held for the whole session. ``means_only``: the smoothed means alone
-    (they need no smoothed covariance), Ps None.
+    (they need no smoothed covariance), Ps None. ``P_add``: added to every P (a jitter), a
+    block at a time, so that P is never copied whole.
     """
     if steps is None:
         steps = lambda lo, hi: (F[lo:hi], b[lo:hi], Q[lo:hi])  # noqa: E731
-    xs, Ps = x.copy(), None if means_only else P.copy()
+    xs, Ps = x.copy(), None if means_only else P + P_add
     for stop in range(x.shape[0] - 1, 0, -block):  # steps k in [start, stop), backwards
         start = max(0, stop - block)
         Fn, bn, Qn = steps(start + 1, stop + 1)
         FnT = np.swapaxes(Fn, 1, 2)
         xp = np.einsum("kij,kj->ki", Fn, x[start:stop]) + bn
-        Pp = Fn @ P[start:stop] @ FnT + Qn
+        Pb = P[start:stop] + P_add
+        Pp = Fn @ Pb @ FnT + Qn
         gain = np.swapaxes(np.linalg.solve(np.swapaxes(Pp, 1, 2),
-                                           np.swapaxes(P[start:stop] @ FnT, 1, 2)), 1, 2)
+                                           np.swapaxes(Pb @ FnT, 1, 2)), 1, 2)
         for j in range(stop - start - 1, -1, -1):
             k = start + j
             xs[k] = x[k] + gain[j] @ (xs[k + 1] - xp[j])
             if means_only:
                 continue
-            Pk = P[k] + gain[j] @ (Ps[k + 1] - Pp[j]) @ gain[j].T
+            Pk = Pb[j] + gain[j] @ (Ps[k + 1] - Pp[j]) @ gain[j].T
             Ps[k] = 0.5 * (Pk + Pk.T)
     return xs, Ps

@@ -256,45 +256,60 @@ def pre_roll(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.nda
     (at most pre_roll_s; none when the rest update is off, the only thing that gives them
     weight): their times, no detections, the IMU orientation, the first pass's start at rest.
     A trial that starts moving leaves its first frame's velocity to the IMU's integral from
-    a hand at rest, instead of a 5 cm/s prior the camera cannot correct along its ray."""
+    a hand at rest, instead of a 5 cm/s prior the camera cannot correct along its ray.
+    Without steps: the arrays given, not copies."""
     dt = float(np.median(np.diff(t_frames)))
     span = min(s.pre_roll_s, t_frames[0] - imu.t[0]) if s.rest_velocity_sd_m_s > 0 else 0.0
     m = int(np.floor(span / dt + 1e-9))
+    if m == 0:
+        return 0, t_frames, z, q_hat, first
     tp = t_frames[0] - dt * np.arange(m, 0, -1)
     fp = np.tile(np.r_[first[0, :3], 0.0, 0.0, 0.0], (m, 1))
     return (m, np.r_[tp, t_frames], np.vstack([np.full((m, 2), np.nan), z]),
             np.vstack([quat.interpolate(imu.t, imu.q_WB, tp), q_hat]), np.vstack([fp, first]))
 
 
-def run(imu: ImuSamples, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
-        first: np.ndarray, x0: np.ndarray, P0: np.ndarray, proj: Projection, s: FuseSettings,
-        arm: Arm) -> Smoothed:
+def _given(box):
+    """The array (or ImuSamples) in ``box``, a one-element list that is emptied, so that the
+    caller holds it no more: it is freed when run lets it go (issue 15); else ``box``."""
+    return box.pop() if isinstance(box, list) else box
+
+
+def run(imu: ImuSamples | list, t_frames: np.ndarray, z: np.ndarray, q_hat: np.ndarray,
+        first: np.ndarray | list, x0: np.ndarray, P0: np.ndarray, proj: Projection,
+        s: FuseSettings, arm: Arm) -> Smoothed:
     """Smooth the session: frames at t_frames (n,) s with detections z (n, 2) px (NaN = none),
-    the IMU orientation q_hat (n, 4) at each frame, ``first`` (n, 6) the first pass's (p, v)."""
+    the IMU orientation q_hat (n, 4) at each frame, ``first`` (n, 6) the first pass's (p, v).
+    ``imu`` and ``first`` may each come in a one-element list, which run empties: then
+    nothing holds the IMU's samples once they are folded, nor the first pass once the first
+    iteration has linearised about it (fuse's peak memory, issue 15)."""
+    imu, first = _given(imu), _given(first)
     shoulder = np.asarray(arm.shoulder, float) if s.shoulder == "drifting" else None
     m_pre, t_frames, z, q_hat, first = pre_roll(imu, t_frames, z, q_hat, first, s)
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
     period = float(np.median(np.diff(imu.t)))
     gyro = s.orientation_model == "gyro" and imu.gyro()
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
+    still = resting(imu, t_frames, z, s, m_pre)
+    del imu  # folded: what the iterations need of it is fd, track and still
     camera = s.camera_pose == "board" and proj.pose_cov is not None
     m0, Pm0 = prior(x0, P0, s, shoulder, gyro, proj.pose_cov if camera else None)
-    X = np.zeros((t_frames.size, m0.size))
-    X[:, :6] = first
+    start = [np.zeros((t_frames.size, m0.size))]  # _iterate's to let go
+    start[0][:, :6] = first
+    del first
     if shoulder is not None:
-        X[:, drift_slice(m0.size)] = m0[drift_slice(m0.size)]
+        start[0][:, drift_slice(m0.size)] = m0[drift_slice(m0.size)]
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
-    still = resting(imu, t_frames, z, s, m_pre)
-    X, var, elbow_var, gated, iterations, moved = _iterate(
-        fd, track, period, (m0, Pm0), X, z, q_hat, proj, s, arm, shoulder, use_c, use_k, still,
-        camera)
+    X, var, elbow_var, gated, iterations, runs = _iterate(
+        fd, track, period, (m0, Pm0), start, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
+        still, camera)
     X, q_hat = X[m_pre:], q_hat[m_pre:]  # the video's frames
     return Smoothed(X, var[m_pre:], corrected(q_hat, X[:, TH]), elbow_var[m_pre:],
-                    gated[m_pre:], iterations, gyro, moved)
+                    gated[m_pre:], iterations, gyro, runs)
 
 
-def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
+def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
              still, camera=False) -> tuple:
     """run()'s Gauss–Newton iterations, each a checkpointed pass (fuse/smoother_blocks.py:
     equal to the plain pass, memory flat in the session's length): the model built a block of
@@ -302,45 +317,51 @@ def _iterate(fd, track, period, prior_, X, z, q_hat, proj, s, arm, shoulder, use
     fuse/rest.py) inserted, and only the (p, v) and elbow variances kept (a covariance per
     frame would be 0.4 KB of every frame's 0.6 KB). After the first iteration, runs of frames
     on the wrong ray–sphere root are moved to the other (``repaired``). Returns X, the (p, v)
-    and elbow variances, the gated detections, the iterations run and the runs moved."""
+    and elbow variances, the gated detections, the iterations run and the runs moved.
+    ``start``: [the first trajectory], emptied: each pass writes its smoothed states over it
+    as it goes, so one (n, d) trajectory is held, not two."""
+    X = _given(start)  # each pass's smoothed states written over it, block by block
     n = X.shape[0]
     sh_fixed = None if shoulder is not None else arm.shoulder
     rk = s.constraint_sigma_m**2
     var, elbow_var = np.empty((n, 6)), np.empty((n, 3))
-    iterations, step, previous, gated, moved = 0, np.inf, np.inf, np.zeros(n, bool), 0
+    iterations, step, previous, gated, runs = 0, np.inf, np.inf, np.zeros(n, bool), 0
     while iterations < s.smoother_iterations and not converged(step, previous):
-        Xn = np.empty_like(X)
+        was, moved = {}, []  # a block's first row before this pass wrote it; each block's move
 
-        def model(lo: int, hi: int, X=X, steps_only: bool = False) -> tuple:
+        def model(lo: int, hi: int, steps_only: bool = False, was=was, X=X) -> tuple:
             """The steps and rows of frames lo … hi − 1 (the steps alone: steps_only)."""
             F, b, Q = process(_rows(fd, lo, hi), s, shoulder, period,
                               None if track is None else _rows(track, lo, hi), camera)
             if steps_only:
                 ins = rest.steps_with_rows(still[lo:hi], F, b, Q)
                 return ins.arrays if not still[lo:hi].any() else (*ins.arrays, ins.real)
-            Hc, zc, Hk, zk = linearise(X[lo:hi], z[lo:hi], q_hat[lo:hi], proj, arm, sh_fixed,
-                                       camera)
+            Hc, zc, Hk, zk = linearise(_before(X, was, lo, hi), z[lo:hi], q_hat[lo:hi], proj,
+                                       arm, sh_fixed, camera)
             arrays = (F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi])
             if not still[lo:hi].any():
                 return arrays
             ins = rest.with_rows(still[lo:hi], s.rest_velocity_sd_m_s, rk, *arrays)
             return (*ins.arrays, ins.real)
 
-        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, Xn=Xn) -> None:
-            Xn[lo:hi], var[lo:hi] = xs, np.diagonal(Ps[:, :6, :6], axis1=1, axis2=2)
+        def keep(lo: int, hi: int, xs: np.ndarray, Ps: np.ndarray, was=was, moved=moved,
+                 X=X) -> None:
+            was[lo] = X[lo].copy()
+            moved.append(np.abs(xs[:, P_] - X[lo:hi, P_]).max())
+            X[lo:hi], var[lo:hi] = xs, np.diagonal(Ps[:, :6, :6], axis1=1, axis2=2)
             elbow_var[lo:hi] = np.diagonal(_elbow_cov(q_hat[lo:hi], xs, Ps, arm), axis1=1, axis2=2)
 
         gated = smooth_blocked(*prior_, model, n, rc=s.pixel_sigma**2, rk=rk,
                                gate=float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf,  # 0: off
                                keep=keep)
-        previous, step = step, np.abs(Xn[:, P_] - X[:, P_]).max()
-        X, iterations = Xn, iterations + 1
+        previous, step = step, np.max(moved)
+        iterations += 1
         if iterations == 1 < s.smoother_iterations and s.branch_repair and shoulder is None:
-            X, moved = repaired(X, z, q_hat, proj, arm, camera,
-                                lambda lo, hi: process(_rows(fd, lo, hi), s, None, period,
-                                                       None if track is None
-                                                       else _rows(track, lo, hi), camera)[:2])
-    return X, var, elbow_var, gated, iterations, moved
+            X, runs = repaired(X, z, q_hat, proj, arm, camera,
+                               lambda lo, hi: process(_rows(fd, lo, hi), s, None, period,
+                                                      None if track is None
+                                                      else _rows(track, lo, hi), camera)[:2])
+    return X, var, elbow_var, gated, iterations, runs
 
 
 def repaired(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, arm: Arm,
@@ -352,6 +373,15 @@ def repaired(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, 
         proj = camera_pose.moved(proj, X[:, camera_slice(X.shape[1], False)].mean(axis=0))
     points = robust.ray_sphere_points(proj, arm, z, corrected(q_hat, X[:, TH]))
     return branch_repair.repair(X, points, steps)
+
+
+def _before(X: np.ndarray, was: dict, lo: int, hi: int) -> np.ndarray:
+    """X's rows lo … hi − 1 as the pass found them: the backward pass (smoother_blocks.py)
+    linearises a block with the next block's first frame, which it has just written (``was``
+    holds that row as it was)."""
+    if hi - 1 not in was:
+        return X[lo:hi]
+    return np.concatenate([X[lo:hi - 1], was[hi - 1][None]])
 
 
 def _rows(a, lo: int, hi: int):

@@ -41,15 +41,27 @@ FOLD_FRAMES = 2048  # frames folded at once (their pieces: ~4 per frame at 100 H
 
 @dataclass(frozen=True)
 class Folded:
-    """Per camera frame k, the step k-1 -> k (index 0 unused: zeros)."""
+    """Per camera frame k, the step k-1 -> k (index 0 unused: zeros). A_p and A_v are made
+    when asked from the integrals of s they are the cross-product matrices of (skew is
+    linear), which is 6 numbers a frame held instead of 18."""
 
     dt: np.ndarray  # (n,) Δ, s
     dp: np.ndarray  # (n, 3) m, ∫ (s + g)(t_k − t) dt
     dv: np.ndarray  # (n, 3) m/s, ∫ (s + g) dt
-    A_p: np.ndarray  # (n, 3, 3) ∂p_k/∂δθ
-    A_v: np.ndarray  # (n, 3, 3) ∂v_k/∂δθ
+    s_p: np.ndarray  # (n, 3) m, ∫ s (t_k − t) dt
+    s_v: np.ndarray  # (n, 3) m/s, ∫ s dt
     B_p: np.ndarray  # (n, 3, 3) −∂p_k/∂b_a
     B_v: np.ndarray  # (n, 3, 3) −∂v_k/∂b_a
+
+    @property
+    def A_p(self) -> np.ndarray:
+        """(n, 3, 3) ∂p_k/∂δθ = ∫ [s]× (t_k − t) dt = [s_p]×."""
+        return skew(self.s_p)
+
+    @property
+    def A_v(self) -> np.ndarray:
+        """(n, 3, 3) ∂v_k/∂δθ = ∫ [s]× dt = [s_v]×."""
+        return skew(self.s_v)
 
 
 @dataclass(frozen=True)
@@ -110,7 +122,7 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
     if hold not in HOLDS:
         raise ValueError(f"unknown hold {hold!r}; holds are {', '.join(HOLDS)}")
     n = t_frames.size
-    acc_v, acc_p = np.zeros((n, 3, 7)), np.zeros((n, 3, 7))
+    acc_v, acc_p = np.zeros((n, 3, 5)), np.zeros((n, 3, 5))  # per frame: s + g, s, R
     for a in range(0, n - 1, FOLD_FRAMES):  # the pieces of a chunk of frames at a time: the
         # temporaries (a dozen arrays per piece) bounded however long the session
         k, (j, j1), (wv, wv1), (wp, wp1) = _segments(t_imu, t_frames, hold, a,
@@ -118,15 +130,15 @@ def fold(t_imu: np.ndarray, q_WB: np.ndarray, f_B: np.ndarray, t_frames: np.ndar
         lo, hi = j[0], j1[-1] + 1  # the samples this chunk's pieces use
         R = quat.to_matrix(q_WB[lo:hi])  # R̂_WB
         s = np.einsum("mij,mj->mi", R, f_B[lo:hi])  # specific force in W
-        per_sample = np.concatenate([(s + GRAVITY_W)[:, :, None], skew(s), R], axis=2)
+        per_sample = np.concatenate([(s + GRAVITY_W)[:, :, None], s[:, :, None], R], axis=2)
         first = np.flatnonzero(np.r_[True, np.diff(k) > 0])  # k sorted: each frame's pieces
         for acc, w0, w1 in ((acc_v, wv, wv1), (acc_p, wp, wp1)):
             piece = (w0[:, None, None] * per_sample[j - lo]
                      + w1[:, None, None] * per_sample[j1 - lo])
             acc[k[first]] += np.add.reduceat(piece, first, axis=0)  # a frame's pieces at once
     dt = np.r_[0.0, np.diff(t_frames)]
-    return Folded(dt, acc_p[:, :, 0], acc_v[:, :, 0], acc_p[:, :, 1:4], acc_v[:, :, 1:4],
-                  acc_p[:, :, 4:7], acc_v[:, :, 4:7])
+    return Folded(dt, acc_p[:, :, 0], acc_v[:, :, 0], acc_p[:, :, 1], acc_v[:, :, 1],
+                  acc_p[:, :, 2:5], acc_v[:, :, 2:5])
 
 
 def _at(t_src: np.ndarray, y: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -30,6 +30,16 @@ class Inputs:
     q_WB: np.ndarray  # (n_frames, 4)
     t: np.ndarray | None = None  # (n_frames,) s, the frames' times (arm-smoother)
     imu: arm_smoother.ImuSamples | None = None  # the IMU samples themselves (arm-smoother)
+    release_imu: bool = False  # the arm smoother takes ``imu`` away once it has them
+    #                            (take_imu): fuse's inputs, run once (issue 15)
+
+    def take_imu(self) -> arm_smoother.ImuSamples | None:
+        """``imu``; with release_imu, this Inputs (whoever holds it) holds them no more, so
+        that they are freed as soon as the taker lets them go."""
+        imu = self.imu
+        if self.release_imu:
+            object.__setattr__(self, "imu", None)  # frozen but for this hand-over
+        return imu
 
 
 @dataclass(frozen=True)
@@ -281,7 +291,7 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
-            first = smooth(est, inp, s, "pf-constraint", means_only=True).mean  # the means alone
+            first = [smooth(est, inp, s, "pf-constraint", means_only=True).mean]  # the means
             del est  # its (n, 6, 6) covariances, not held through the smoother (issue 15)
             return run_arm_smoother(inp, x0, P0, proj, s, arm, first)
     else:
@@ -328,12 +338,16 @@ def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Proje
 
 
 def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
-                     s: FuseSettings, arm: Arm, first: np.ndarray) -> Estimates:
+                     s: FuseSettings, arm: Arm, first: np.ndarray | list) -> Estimates:
     """The orientation-aware arm smoother (fuse/arm_smoother.py) from the first pass ``first``
-    (n_frames, 6); its (p, v) block as every method's, the rest in the summary."""
+    (n_frames, 6) (or [it]: arm_smoother.run lets it go); its (p, v) block as every
+    method's, the rest in the summary."""
     if inp.imu is None or inp.t is None:
         raise ValueError("arm-smoother needs the IMU samples and the frame times in its inputs")
-    r = arm_smoother.run(inp.imu, inp.t, inp.z, inp.q_WB, first, x0, P0, proj, s, arm)
+    imu = [inp.take_imu()]  # arm_smoother.run's: freed once folded where inp lets them go
+    at_rest = (int(arm_smoother.resting(imu[0], inp.t, inp.z, s).sum())
+               if s.rest_velocity_sd_m_s > 0 else None)
+    r = arm_smoother.run(imu, inp.t, inp.z, inp.q_WB, first, x0, P0, proj, s, arm)
     th = r.x[:, arm_smoother.TH]
     summary = {"detections_gated": int(r.gated.sum()), "smoother_iterations": r.iterations,
                "start_runs_moved": r.runs_moved,
@@ -351,10 +365,10 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
             sh - arm.shoulder, axis=1).max()), 4)
         ell = r.x[:, arm_smoother.drift_slice(r.x.shape[1]).start]
         summary["upper_arm_change_m"] = [round(float(v), 4) for v in (ell.min(), ell.max())]
-    if s.rest_velocity_sd_m_s > 0:
-        summary["frames_at_rest"] = int(arm_smoother.resting(inp.imu, inp.t, inp.z, s).sum())
-    return Estimates(r.x[:, :6], None, None, q_WB=r.q_WB, elbow_var=r.elbow_var,
-                     summary=summary, var=r.var)
+    if at_rest is not None:
+        summary["frames_at_rest"] = at_rest
+    return Estimates(r.x[:, :6].copy(), None, None, q_WB=r.q_WB, elbow_var=r.elbow_var,
+                     summary=summary, var=r.var)  # (p, v) alone: not the whole state held
 
 
 def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str, *,
@@ -371,6 +385,6 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str, *,
         F, b, Q = inp.steps.stacked(lo, hi)  # a block at a time: memory flat with the length
         return F, b, Q + walk + 1e-12 * np.eye(6)
 
-    x, P = gaussian.rts_smooth(est.mean, est.cov + 1e-12 * np.eye(6), steps=steps,
-                               means_only=means_only)  # P None then
+    x, P = gaussian.rts_smooth(est.mean, est.cov, steps=steps, means_only=means_only,
+                               P_add=1e-12 * np.eye(6))  # P None then
     return Estimates(x, P, est.ess, est.codes)

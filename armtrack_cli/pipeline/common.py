@@ -1,4 +1,5 @@
-"""What every stage's orchestration shares: where outputs go, and the resolved recipe."""
+"""What every stage's orchestration shares: where outputs go, the resolved recipe, and the
+memory a finished phase freed handed back."""
 
 from __future__ import annotations
 
@@ -23,3 +24,20 @@ def resolve_recipe(recipe: str | None, sets: tuple[str, ...]) -> tuple[dict[str,
         where = "--set" if where == "defaults" else f"{where} with --set"
     known_sections(doc, RECIPE_SECTIONS, where)
     return doc, where
+
+
+def release_memory() -> None:
+    """What a finished stage (or a phase of one: fuse's reading, its method) freed, handed
+    back to the system before the next starts, so that in one process their peaks do not add
+    up (issue 15): the reference cycles Python has not collected yet, and glibc's free pages
+    (malloc_trim, every arena's: the decoding thread's arena otherwise keeps the pages its
+    frames had; freed arrays inside the heap stay resident until trimmed). A no-op without
+    glibc."""
+    import ctypes
+    import gc
+
+    gc.collect()
+    try:
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc
+        pass

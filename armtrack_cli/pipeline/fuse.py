@@ -21,7 +21,7 @@ from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.kernel_setup import load_kernels
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
-from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe
 from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
 from armtrack_cli.session.arm_file import write_arm_estimate
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
@@ -147,8 +147,12 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         session = arm_model.with_arm(session, auto.shoulder, auto.upper_arm_m, auto.forearm_m)
         p = dataclasses.replace(p, arm=dataclasses.replace(
             p.arm, shoulder=auto.shoulder, L1=auto.upper_arm_m, L2=auto.forearm_m))
-    p = dataclasses.replace(p, q_anchored=None)  # the arm estimate's alone: not held on
+    # q_anchored: the arm estimate's alone, not held on; the IMU's samples: the arm smoother's
+    # to let go once folded (methods.Inputs.take_imu)
+    p = dataclasses.replace(p, q_anchored=None,
+                            inputs=dataclasses.replace(p.inputs, release_imu=True))
     inp = p.inputs
+    release_memory()  # reading and the offset's check freed more than they kept
     x0, P0, how = _initial_state(session, p, s)
     start = time.perf_counter()
     load_kernels(s.method)  # numba's one-time set-up, timed apart: frames_per_s is the filter's
@@ -156,6 +160,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     start, cpu = time.perf_counter(), time.process_time()
     est = run(s.method, inp, x0, P0, p.projection, s, p.arm)
     elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
+    release_memory()  # the method's working arrays, before the trajectory and its measures
     from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 
     table = trajectory_table(p.t_frames, p.frames, est, inp, p.arm)
@@ -185,6 +190,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     n, summary, offset = int(p.frames.size), est.summary or {}, p.imu_offset
     used = int(np.isfinite(inp.z).all(axis=1).sum())
     del est, p, inp  # the filter's per-frame arrays, before the measures' draws
+    release_memory()  # … and their pages
     _write(dest, s.method, table, session, q_WB, settings, auto)
     return {"method": s.method, "trajectory": str(dest / name), "frames": n,
             "detections_used": used,

@@ -15,7 +15,7 @@ from armtrack_cli.core.methods import BUILT, METHODS, PALM_METHODS
 from armtrack_cli.detect.palm_blobs import PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings
 from armtrack_cli.pipeline.calibrate import calibrate
-from armtrack_cli.pipeline.common import out_dir, resolve_recipe
+from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe
 from armtrack_cli.pipeline.compare import compare
 from armtrack_cli.pipeline.detect import detect
 from armtrack_cli.pipeline.fuse import fuse, settings_for
@@ -98,21 +98,6 @@ def _stale(step: Step, work: WorkFolder, *, force: bool, sets) -> bool:
         return True
     made, needed = work.oldest(step.outputs), newest(step.inputs)
     return made is None or needed is None or needed > made
-
-
-def release_memory() -> None:
-    """What a finished stage freed, handed back to the system before the next stage starts,
-    so that in one process the stages' peaks do not add up (issue 15): the reference cycles
-    Python has not collected yet, and glibc's free pages (malloc_trim, every arena's: the
-    decoding thread's arena otherwise keeps the pages its frames had). A no-op without glibc."""
-    import ctypes
-    import gc
-
-    gc.collect()
-    try:
-        ctypes.CDLL(None).malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc
-        pass
 
 
 def run(session: str | Path, *, through: str = "report", methods: tuple[str, ...] = (),

@@ -1,0 +1,86 @@
+"""fuse lets go of what its later phases no longer need, so that a long session's peak memory
+is not their sum (issue 15). Asserted as objects freed (their weak references dead after a
+collection), not as resident memory, which is the machine's and the allocator's."""
+
+from __future__ import annotations
+
+import gc
+import importlib
+import shutil
+import weakref
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armtrack_cli import pipeline
+from armtrack_cli.fuse import arm_smoother, methods
+
+fuse_stage = importlib.import_module("armtrack_cli.pipeline.fuse")  # the module (pipeline.fuse
+#                                                                    is the stage's function)
+
+SAMPLE = Path(__file__).resolve().parents[1] / "sample_sessions" / "circle-01"
+
+
+def _root(a: np.ndarray) -> np.ndarray:
+    """The array that owns a's memory (a view's base, and its base, …)."""
+    while isinstance(a.base, np.ndarray):
+        a = a.base
+    return a
+
+
+@pytest.fixture(scope="module")
+def detected(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("memory") / "circle-01"
+    shutil.copytree(SAMPLE, folder, ignore=shutil.ignore_patterns("armtrack"))
+    pipeline.run(folder, through="detect")
+    return folder
+
+
+def test_the_smoother_runs_without_the_imu_samples_first_pass_or_start(detected, monkeypatch):
+    """By the arm smoother's first pass the IMU's samples (folded by then) and the first
+    pass's means (copied into the start trajectory) are freed, and stay so in every later
+    pass. fuse's outputs are written as before."""
+    imu, first, passes = [], [], []
+    made = fuse_stage.ImuSamples
+
+    def imu_samples(*arrays):  # the IMU's arrays as fuse's inputs hold them
+        imu.extend(weakref.ref(_root(a)) for a in arrays if a is not None)
+        return made(*arrays)
+
+    smooth = methods.smooth
+
+    def first_pass(*a, **k):
+        est = smooth(*a, **k)
+        if k.get("means_only"):
+            first.append(weakref.ref(_root(est.mean)))
+        return est
+
+    blocked = arm_smoother.smooth_blocked
+
+    def watched(x0, P0, model, *a, **k):
+        gc.collect()
+        passes.append((sum(r() is not None for r in imu), sum(r() is not None for r in first)))
+        return blocked(x0, P0, model, *a, **k)
+
+    monkeypatch.setattr(fuse_stage, "ImuSamples", imu_samples)
+    monkeypatch.setattr(methods, "smooth", first_pass)
+    monkeypatch.setattr(arm_smoother, "smooth_blocked", watched)
+    out = pipeline.fuse(detected)
+    assert out["method"] == "arm-smoother" and Path(out["trajectory"]).exists()
+    assert len(imu) == 4 and len(first) == 1 and len(passes) >= 2, (imu, first, passes)
+    assert all(p == (0, 0) for p in passes), passes
+
+
+def test_without_release_the_inputs_keep_their_imu(detected):
+    """Inputs that were not handed over (release_imu False: every caller but fuse's) keep
+    their IMU samples through the arm smoother, for a second method on the same inputs."""
+    s, _ = fuse_stage.settings_for(None, (), kind="arm")
+    p = fuse_stage.prepare(fuse_stage.load_session(detected), detected / "armtrack", s)
+    x0 = np.zeros(6)
+    x0[:3], _ = fuse_stage.models.initial_wrist(p.projection, p.inputs.z[0], arm=p.arm,
+                                                q_WB=p.inputs.q_WB[0],
+                                                plane_height_m=s.init_plane_m)
+    P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
+    methods.run("arm-smoother", p.inputs, x0, P0, p.projection, s, p.arm)
+    assert p.inputs.imu is not None and not p.inputs.release_imu
