@@ -1,0 +1,83 @@
+"""Work beside the main thread (issue 15: the machine has two cores and fuse or compare kept
+one busy): ``Deferred(fn, *args)`` starts fn(*args) on its own thread, ``result()`` waits for
+it and returns its value or raises its exception, on the caller's thread. Only for work whose
+time goes to code that lets go of the GIL (numpy's array operations, numba kernels compiled
+with ``nogil=True``); pure-Python work on two threads takes as long as on one.
+
+Memory: glibc gives every thread that allocates its own malloc arena, whose freed pages stay
+in the process (each arena grows to the thread's own peak and is trimmed only from its top),
+so a second thread's temporaries were added to the main thread's at the peak. ``one_arena``
+(run before the first thread starts) keeps every thread on the main arena (mallopt
+M_ARENA_MAX = 1): the large arrays are mmap'd either way, so the threads contend for the
+small allocations alone. A no-op without glibc."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+M_ARENA_MAX = -8  # glibc's malloc.h
+_arena = {"set": False}
+
+
+def one_arena() -> None:
+    """Every thread's allocations from glibc's main arena (once per process)."""
+    if _arena["set"]:
+        return
+    _arena["set"] = True
+    import ctypes
+
+    try:
+        ctypes.CDLL(None).mallopt(M_ARENA_MAX, 1)
+    except (OSError, AttributeError):  # not glibc
+        pass
+
+
+class Deferred:
+    """fn(*args, **kwargs) on a thread of its own, started at once; ``result()`` its value."""
+
+    def __init__(self, fn: Callable[..., Any], *args: Any, **kwargs: Any):
+        one_arena()
+        self._value: Any = None
+        self._error: BaseException | None = None
+
+        def work() -> None:
+            try:
+                self._value = fn(*args, **kwargs)
+            except BaseException as exc:  # noqa: BLE001 (re-raised by result())
+                self._error = exc
+
+        self._thread = threading.Thread(target=work, name=getattr(fn, "__name__", "deferred"),
+                                        daemon=True)
+        self._thread.start()
+
+    def result(self) -> Any:
+        """fn's value once it has returned (waiting for it); its exception re-raised here."""
+        self._thread.join()
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
+        return self._value
+
+
+class Done:
+    """A value already known, with Deferred's ``result()``: a caller that runs the work at
+    once (too large to run beside, or needed before anything else) hands back the same."""
+
+    def __init__(self, value: Any):
+        self._value = value
+
+    def result(self) -> Any:
+        return self._value
+
+
+def map_halves(fn: Callable[[Any], Any], items: list) -> list:
+    """[fn(x) for x in items] with the first half's calls on a second thread and the second
+    half's on this one (two cores); in order. One item or none: on this thread alone."""
+    if len(items) < 2:
+        return [fn(x) for x in items]
+    half = len(items) // 2
+    first = Deferred(lambda part: [fn(x) for x in part], items[:half])
+    rest = [fn(x) for x in items[half:]]
+    return first.result() + rest
