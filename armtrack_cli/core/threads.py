@@ -68,16 +68,9 @@ class Done:
     def __init__(self, value: Any):
         self._value = value
 
+    def start(self) -> None:
+        """Nothing to start (a deferred check's ``start``)."""
+
     def result(self) -> Any:
         return self._value
 
-
-def map_halves(fn: Callable[[Any], Any], items: list) -> list:
-    """[fn(x) for x in items] with the first half's calls on a second thread and the second
-    half's on this one (two cores); in order. One item or none: on this thread alone."""
-    if len(items) < 2:
-        return [fn(x) for x in items]
-    half = len(items) // 2
-    first = Deferred(lambda part: [fn(x) for x in part], items[:half])
-    rest = [fn(x) for x in items[half:]]
-    return first.result() + rest

@@ -63,8 +63,9 @@ class Prepared:
 
 def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False
             ) -> Prepared:
-    """The session's inputs on its clock; with ``beside``, a declared IMU offset's check
-    runs on a second thread while the caller goes on (pipeline/imu_offset.py)."""
+    """The session's inputs on its clock; with ``beside``, a declared IMU offset's check is
+    left to run on a second thread from ``imu_offset.start()``, beside the caller's work
+    (pipeline/imu_offset.py); ``imu_offset.result()`` waits for it."""
     from armtrack_cli.session.tables import read_patch_detections
 
     require(session, "imu")
@@ -142,7 +143,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         raise ConfigError(session.toml_path, f"has no [arm] section, which {s.method} needs",
                           "use inertial, ekf, ukf or pf, or add the arm model")
     dest = out_dir(session, out)
-    p = prepare(session, dest, s, beside=True)  # the offset's check beside the filter
+    p = prepare(session, dest, s, beside=True)  # the offset's check: started below
     auto = None
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
         from armtrack_cli.pipeline import arm_model
@@ -158,6 +159,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     start = time.perf_counter()
     load_kernels(s.method)  # numba's one-time set-up, timed apart: frames_per_s is the filter's
     setup = time.perf_counter() - start
+    p.imu_offset.start()  # the offset's check beside the filter's kernels (no GIL held)
     start, cpu = time.perf_counter(), time.thread_time()  # this thread's: not the check's
     try:
         est = run(s.method, inp, x0, P0, p.projection, s, p.arm)

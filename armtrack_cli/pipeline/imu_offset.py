@@ -49,8 +49,7 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
     search = CHECK_SEARCH_S if declared else AUTO_SEARCH_S
     if declared:
         if beside and t_imu.size <= BESIDE_MAX_SAMPLES:
-            return centre, _Checked(imu_file, centre, Deferred(
-                estimate_imu_offset, problem, centre_s=centre, search_s=search))
+            return centre, _Checked(imu_file, centre, problem, search)
         return centre, Done(_judged(imu_file, centre, estimate_imu_offset(
             problem, centre_s=centre, search_s=search)))
     off = estimate_imu_offset(problem, centre_s=centre, search_s=search)
@@ -63,13 +62,25 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
 
 
 class _Checked:
-    """A declared offset's check on its thread; ``result()``: _judged's dict (and warning)."""
+    """A declared offset's check, run on a thread of its own from ``start()`` (the caller
+    starts it where its own work lets go of the GIL: fuse, before the filter's compiled
+    kernels, after numba's set-up, whose Python it would slow); ``result()``: _judged's dict
+    (and warning), the check run here if it was never started."""
 
-    def __init__(self, imu_file: Path, centre: float, pending: Deferred):
-        self.imu_file, self.centre, self.pending = imu_file, centre, pending
+    def __init__(self, imu_file: Path, centre: float, problem: SyncProblem, search_s: float):
+        self.imu_file, self.centre = imu_file, centre
+        self.args, self.job = (problem,), None
+        self.kwargs = {"centre_s": centre, "search_s": search_s}
+
+    def start(self) -> None:
+        if self.job is None:
+            self.job = Deferred(estimate_imu_offset, *self.args, **self.kwargs)
+            self.args = ()  # the problem's arrays held by the thread alone
 
     def result(self) -> dict:
-        return _judged(self.imu_file, self.centre, self.pending.result())
+        off = (estimate_imu_offset(*self.args, **self.kwargs) if self.job is None
+               else self.job.result())
+        return _judged(self.imu_file, self.centre, off)
 
 
 def _judged(imu_file: Path, centre: float, off: ImuOffset | None) -> dict:
