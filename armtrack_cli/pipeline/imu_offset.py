@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import DataError
-from armtrack_cli.fuse import models
 from armtrack_cli.core.threads import Deferred, Done
+from armtrack_cli.fuse import models
 from armtrack_cli.fuse.imu_sync import ImuOffset, SyncProblem, estimate_imu_offset
 
 AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
