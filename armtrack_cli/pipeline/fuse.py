@@ -159,10 +159,12 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     start = time.perf_counter()
     load_kernels(s.method)  # numba's one-time set-up, timed apart: frames_per_s is the filter's
     setup = time.perf_counter() - start
-    p.imu_offset.start()  # the offset's check beside the filter's kernels (no GIL held)
+    p.imu_offset.start()  # the offset's check beside the compiled forward pass (no GIL held),
+    #                       finished before the smoothers, whose memory peaks (issue 15)
     start, cpu = time.perf_counter(), time.thread_time()  # this thread's: not the check's
     try:
-        est = run(s.method, inp, x0, P0, p.projection, s, p.arm)
+        est = run(s.method, inp, x0, P0, p.projection, s, p.arm,
+                  forward_done=p.imu_offset.result)
         elapsed, cpu = time.perf_counter() - start, time.thread_time() - cpu
     finally:  # the offset's check (and its warning) before any error of the filter's
         offset = p.imu_offset.result()

@@ -69,7 +69,7 @@ class _Checked:
 
     def __init__(self, imu_file: Path, centre: float, problem: SyncProblem, search_s: float):
         self.imu_file, self.centre = imu_file, centre
-        self.args, self.job = (problem,), None
+        self.args, self.job, self.info = (problem,), None, None
         self.kwargs = {"centre_s": centre, "search_s": search_s}
 
     def start(self) -> None:
@@ -78,9 +78,12 @@ class _Checked:
             self.args = ()  # the problem's arrays held by the thread alone
 
     def result(self) -> dict:
-        off = (estimate_imu_offset(*self.args, **self.kwargs) if self.job is None
-               else self.job.result())
-        return _judged(self.imu_file, self.centre, off)
+        """The dict, judged (and warned about) once; asked again, the same dict."""
+        if self.info is None:
+            off = (estimate_imu_offset(*self.args, **self.kwargs) if self.job is None
+                   else self.job.result())
+            self.info, self.job, self.args = _judged(self.imu_file, self.centre, off), None, ()
+        return self.info
 
 
 def _judged(imu_file: Path, centre: float, off: ImuOffset | None) -> dict:
