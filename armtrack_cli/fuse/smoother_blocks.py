@@ -22,7 +22,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from armtrack_cli.core.threads import Deferred
+from armtrack_cli.core.threads import Deferred, Done
 from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
 
 BLOCK = 1024  # frames per block: ~2 MB of covariances at d = 15
@@ -53,44 +53,51 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
     bufs, store = (_Rows(d), _Rows(d)), _Store(d, store_mb)
     gated = np.zeros(n, bool)
     x, P = np.asarray(x0, float), np.asarray(P0, float)
-    # forward: checkpoints, the gate's decisions, the store; each block's filter on a second
-    # thread (the kernel holds no GIL) while this one builds the next block's model
-    ahead = model(0, min(block, n))
+    # forward: checkpoints, the gate's decisions, the store; each block's filter (a compiled
+    # kernel that holds no GIL) here while a second thread builds the next block's model (the
+    # kernel never waits for the GIL to start: core/threads.py)
+    ahead = Done(model(0, min(block, n)))
     for i, lo in enumerate(starts):
         hi = min(lo + block, n)
         check_x[i], check_P[i] = x, P
-        m, real = _split(ahead, 9)
+        m, real = _split(ahead.result(), 9)
         rows = m[0].shape[0]
         xf, Pf, g = bufs[0].take(rows)
-        job = Deferred(_filter, x, P, m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
-        ahead = model(hi, min(hi + block, n)) if hi < n else None
-        x, P = job.result()
+        ahead = Deferred(model, hi, min(hi + block, n)) if hi < n else None
+        x, P = _filter(x, P, m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
         gated[lo:hi] = g[:rows] if real is None else g[:real.size][real]
         store.put(i, xf[:rows], Pf[:rows])
-    # backward, a block at a time: its filter (unless stored) and RTS on a second thread while
-    # this one hands the previous block to ``keep`` and builds the next one's model (two
-    # buffers: ``keep`` reads one while the kernels write the other)
+    # backward, a block at a time: its filter (unless stored) and RTS here while a second
+    # thread hands the block before to ``keep`` and builds the next one's model (two buffers:
+    # ``keep`` reads one while the kernels write the other)
     xs_next, Ps_next, done = np.zeros(d), np.zeros((d, d)), None
-    ahead = _backward_model(model, starts, len(starts) - 1, block, n, store)
+    ahead = Done(_backward_model(model, starts, len(starts) - 1, block, n, store))
     for i in range(len(starts) - 1, -1, -1):
         lo = starts[i]
         hi = min(lo + block, n)
-        kept, m, real = ahead
+        kept, m, real = ahead.result()
         rows = _rows_of(real, hi - lo, m[0].shape[0], hi == n)
         xf, Pf, g = bufs[i % 2].take(m[0].shape[0])
         if kept:
             store.take(i, xf, Pf)
-        job = Deferred(_smooth_block, None if kept else (check_x[i], check_P[i]), m, rc, rk,
-                       gate, lo == 0, rows, xf, Pf, g, xs_next, Ps_next, hi == n)
-        if done is not None:
-            _keep(keep, *done)
-        ahead = _backward_model(model, starts, i - 1, block, n, store) if i > 0 else None
-        job.result()
+        ahead = Deferred(_kept_and_ahead, keep, done, model, starts, i - 1, block, n, store)
+        _smooth_block(None if kept else (check_x[i], check_P[i]), m, rc, rk, gate, lo == 0,
+                      rows, xf, Pf, g, xs_next, Ps_next, hi == n)
         done = (lo, hi, xf, Pf, rows, real)
         xs_next, Ps_next = xf[0].copy(), Pf[0].copy()
+    ahead.result()
     if done is not None:
         _keep(keep, *done)
     return gated
+
+
+def _kept_and_ahead(keep, done: tuple | None, model: Model, starts: list[int], i: int,
+                    block: int, n: int, store: _Store) -> tuple | None:
+    """The backward pass's second thread: the block smoothed last (``done``) to ``keep``, then
+    block i's model (_backward_model; None before the first block)."""
+    if done is not None:
+        _keep(keep, *done)
+    return _backward_model(model, starts, i, block, n, store) if i >= 0 else None
 
 
 def _backward_model(model: Model, starts: list[int], i: int, block: int, n: int,
