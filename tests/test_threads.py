@@ -1,5 +1,7 @@
 """core/threads.py (work on a second thread) and its users: a declared clock offset's check run
-beside the caller gives the same result and the same one warning as run inline."""
+beside the caller gives the same result and the same one warning as run inline; the
+checkpointed smoother with its models built on a second thread gives the bits it gives on
+one."""
 
 from __future__ import annotations
 
@@ -8,11 +10,14 @@ import warnings
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
-from armtrack_cli.core.threads import Deferred, Done, one_arena
+from armtrack_cli.core import threads
+from armtrack_cli.core.threads import Deferred, Done, now, one_arena
 from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
 from tests.sync_cases import case
+from tests.test_smoother_blocks import _blocked, _plain, _random_problem
 
 
 def test_deferred_runs_on_another_thread_and_returns_its_value():
@@ -35,6 +40,38 @@ def test_done_is_a_value_already_known():
     d = Done({"value": 1.0})
     d.start()  # nothing to start
     assert d.result() == {"value": 1.0}
+
+
+def test_now_runs_at_once_on_this_thread():
+    assert now(lambda a, b=0: (threading.get_ident(), a + b), 2, b=3).result() == (
+        threading.get_ident(), 5)
+
+
+def test_spare_core_follows_the_load(monkeypatch):
+    monkeypatch.setattr(threads.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    monkeypatch.setattr(threads.os, "getloadavg", lambda: (1.2, 0.0, 0.0))
+    assert threads.spare_core()
+    monkeypatch.setattr(threads.os, "getloadavg", lambda: (1.6, 0.0, 0.0))
+    assert not threads.spare_core()
+    monkeypatch.setattr(threads.os, "sched_getaffinity", lambda pid: {0}, raising=False)
+    monkeypatch.setattr(threads.os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+    assert not threads.spare_core()
+
+
+@pytest.mark.parametrize("store_mb", [8.0, 0.0])  # every block stored; none (filtered again)
+def test_smoother_blocks_on_two_threads_equal_one(monkeypatch, store_mb):
+    """The same bits whether the next block's model (and the backward pass's keep) is made on
+    a second thread or on this one, and both the plain pass's to 1e-9."""
+    x0, P0, arrays = _random_problem(np.random.default_rng(3))
+    got = {}
+    for spare in (True, False):
+        monkeypatch.setattr(threads, "spare_core", lambda spare=spare: spare)
+        got[spare] = _blocked(x0, P0, arrays, 0.3, 0.2, 9.0, 64, store_mb)
+    for a, b in zip(got[True], got[False]):
+        assert np.array_equal(a, b)
+    xs, Ps, gated = _plain(x0, P0, arrays, 0.3, 0.2, 9.0)
+    assert np.array_equal(got[True][2], gated) and gated.sum() > 10
+    assert np.abs(got[True][0] - xs).max() < 1e-9 and np.abs(got[True][1] - Ps).max() < 1e-9
 
 
 def test_one_arena_twice_is_harmless():

@@ -9,10 +9,17 @@ in the process (each arena grows to the thread's own peak and is trimmed only fr
 so a second thread's temporaries were added to the main thread's at the peak. ``one_arena``
 (run before the first thread starts) keeps every thread on the main arena (mallopt
 M_ARENA_MAX = 1): the large arrays are mmap'd either way, so the threads contend for the
-small allocations alone. A no-op without glibc."""
+small allocations alone. A no-op without glibc.
+
+Fine-grained hand-offs (a smoother's blocks, hundreds a pass) pay a scheduler's wake-up each
+when every core is busy with other work: there they were slower than one thread (long-10's
+fuse 15.5 s against 14.9 s at load 6.5 on two cores), so such callers ask ``spare_core()``
+first and run everything on their own thread when no core is free (``now``: Deferred's
+interface, the call made at once)."""
 
 from __future__ import annotations
 
+import os
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -74,3 +81,22 @@ class Done:
     def result(self) -> Any:
         return self._value
 
+
+def spare_core() -> bool:
+    """Whether a second thread would find a core of this process's free: the 1-minute load
+    average (which counts this process's own running thread) at least one core short of
+    them, with half a core's slack."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        cores = os.cpu_count() or 1
+    try:
+        load = os.getloadavg()[0]
+    except OSError:  # no load average here
+        return cores >= 2
+    return cores >= 2 and load <= cores - 0.5
+
+
+def now(fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Done:
+    """fn(*args, **kwargs) on this thread, at once, as Deferred's ``result()``."""
+    return Done(fn(*args, **kwargs))

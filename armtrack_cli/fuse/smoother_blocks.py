@@ -22,7 +22,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from armtrack_cli.core.threads import Deferred, Done
+from armtrack_cli.core import threads
+from armtrack_cli.core.threads import Done
 from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
 
 BLOCK = 1024  # frames per block: ~2 MB of covariances at d = 15
@@ -53,6 +54,7 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
     bufs, store = (_Rows(d), _Rows(d)), _Store(d, store_mb)
     gated = np.zeros(n, bool)
     x, P = np.asarray(x0, float), np.asarray(P0, float)
+    beside = threads.Deferred if threads.spare_core() else threads.now  # else one thread
     # forward: checkpoints, the gate's decisions, the store; each block's filter (a compiled
     # kernel that holds no GIL) here while a second thread builds the next block's model (the
     # kernel never waits for the GIL to start: core/threads.py)
@@ -63,7 +65,7 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
         m, real = _split(ahead.result(), 9)
         rows = m[0].shape[0]
         xf, Pf, g = bufs[0].take(rows)
-        ahead = Deferred(model, hi, min(hi + block, n)) if hi < n else None
+        ahead = beside(model, hi, min(hi + block, n)) if hi < n else None
         x, P = _filter(x, P, m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
         gated[lo:hi] = g[:rows] if real is None else g[:real.size][real]
         store.put(i, xf[:rows], Pf[:rows])
@@ -80,7 +82,7 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
         xf, Pf, g = bufs[i % 2].take(m[0].shape[0])
         if kept:
             store.take(i, xf, Pf)
-        ahead = Deferred(_kept_and_ahead, keep, done, model, starts, i - 1, block, n, store)
+        ahead = beside(_kept_and_ahead, keep, done, model, starts, i - 1, block, n, store)
         _smooth_block(None if kept else (check_x[i], check_P[i]), m, rc, rk, gate, lo == 0,
                       rows, xf, Pf, g, xs_next, Ps_next, hi == n)
         done = (lo, hi, xf, Pf, rows, real)
