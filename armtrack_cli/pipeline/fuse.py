@@ -161,7 +161,9 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     setup = time.perf_counter() - start
     p.imu_offset.start()  # the offset's check beside the compiled forward pass (no GIL held),
     #                       finished before the smoothers, whose memory peaks (issue 15)
-    start, cpu = time.perf_counter(), time.thread_time()  # this thread's: not the check's
+    # cpu_seconds: this thread's, not the check's (nor the arm smoother's model building,
+    # when a free core takes it: fuse/smoother_blocks.py)
+    start, cpu = time.perf_counter(), time.thread_time()
     try:
         est = run(s.method, inp, x0, P0, p.projection, s, p.arm,
                   forward_done=p.imu_offset.result)
