@@ -159,17 +159,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     start = time.perf_counter()
     load_kernels(s.method)  # numba's one-time set-up, timed apart: frames_per_s is the filter's
     setup = time.perf_counter() - start
-    p.imu_offset.start()  # the offset's check beside the compiled forward pass (no GIL held),
-    #                       finished before the smoothers, whose memory peaks (issue 15)
-    # cpu_seconds: this thread's, not the check's (nor the arm smoother's model building,
-    # when a free core takes it: fuse/smoother_blocks.py)
-    start, cpu = time.perf_counter(), time.thread_time()
-    try:
-        est = run(s.method, inp, x0, P0, p.projection, s, p.arm,
-                  forward_done=p.imu_offset.result)
-        elapsed, cpu = time.perf_counter() - start, time.thread_time() - cpu
-    finally:  # the offset's check (and its warning) before any error of the filter's
-        offset = p.imu_offset.result()
+    est, elapsed, cpu, offset = _timed_run(s, p, x0, P0)
     from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 
     table = trajectory_table(p.t_frames, p.frames, est, inp, p.arm)
@@ -208,6 +198,31 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             "frames_beyond_reach": int(far.sum()), **guards, **summary,
             **({"arm_auto": auto.as_dict()} if auto else {}),
             "imu_offset_s": offset}
+
+
+def _timed_run(s: FuseSettings, p: Prepared, x0: np.ndarray, P0: np.ndarray
+               ) -> tuple[Any, float, float, dict]:
+    """The method run on p's inputs, timed: (estimates, seconds, cpu_seconds, how the IMU's
+    offset was set). A declared offset's check runs beside the compiled forward pass (no GIL
+    held) and is waited for when that pass ends, before the smoothers, whose memory peaks
+    (issue 15); the wait is not the filter's time. cpu_seconds: this thread's, not the
+    check's (nor the arm smoother's model building, when a free core takes it:
+    fuse/smoother_blocks.py)."""
+    check, waited = p.imu_offset, []
+    check.start()
+
+    def forward_done() -> None:
+        t = time.perf_counter()
+        check.result()
+        waited.append(time.perf_counter() - t)
+
+    start, cpu = time.perf_counter(), time.thread_time()
+    try:
+        est = run(s.method, p.inputs, x0, P0, p.projection, s, p.arm, forward_done=forward_done)
+        elapsed, cpu = time.perf_counter() - start - sum(waited), time.thread_time() - cpu
+    finally:  # the offset's check (and its warning) before any error of the filter's
+        offset = check.result()
+    return est, elapsed, cpu, offset
 
 
 def _write(dest: Path, method: str, table, session: Session, q_WB: np.ndarray,
