@@ -4,6 +4,7 @@ that runs them (``run``). Inputs are per-frame arrays; outputs are per-frame est
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -275,7 +276,11 @@ def guard_args(s: FuseSettings, points: np.ndarray) -> tuple:
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
-        s: FuseSettings, arm: Arm | None) -> Estimates:
+        s: FuseSettings, arm: Arm | None, *, forward_done: Callable[[], object] | None = None
+        ) -> Estimates:
+    """``forward_done``: called once the compiled forward pass (the particles') is done, before
+    what follows it (the smoothers, whose memory peaks): work a caller runs beside that pass
+    ends there (pipeline/fuse.py: the IMU offset's check; issue 15)."""
     if method in ("inertial", "ekf", "ukf"):
         est = run_gaussian(inp, x0, P0, proj, s, method)
     elif method == "pf":
@@ -286,6 +291,8 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         causal = method == "pf-constraint" and s.imu_error == "causal"
         est = (None if causal and s.kalman_linearise == "iterated"  # no first run to linearise
                else run_particles(inp, x0, P0, proj, s, arm, constrained=True))
+        if forward_done is not None and est is not None:  # else at the caller's end
+            forward_done()
         if causal:
             est = run_error_corrected(inp, x0, P0, proj, s, arm, est)
         elif method == "pf-constraint" and s.imu_bias_window_s > 0:

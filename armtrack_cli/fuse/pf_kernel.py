@@ -328,7 +328,7 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
     return True, run_gated, ss
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)  # threads beside it (issue 15)
 def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
         constrained, scheme, resample_ess, guard, v_ref, v_gain):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF

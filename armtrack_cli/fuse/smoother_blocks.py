@@ -22,6 +22,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from armtrack_cli.core import threads
+from armtrack_cli.core.threads import Done
 from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
 
 BLOCK = 1024  # frames per block: ~2 MB of covariances at d = 15
@@ -49,39 +51,84 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
     starts = list(range(0, n, block))
     check_x = np.empty((len(starts), d))
     check_P = np.empty((len(starts), d, d))
-    buf, store = _Rows(d), _Store(d, store_mb)
+    bufs, store = (_Rows(d), _Rows(d)), _Store(d, store_mb)
     gated = np.zeros(n, bool)
     x, P = np.asarray(x0, float), np.asarray(P0, float)
-    for i, lo in enumerate(starts):  # forward: checkpoints, the gate's decisions, the store
+    beside = threads.Deferred if threads.spare_core() else threads.now  # else one thread
+    # forward: checkpoints, the gate's decisions, the store; each block's filter (a compiled
+    # kernel that holds no GIL) here while a second thread builds the next block's model (the
+    # kernel never waits for the GIL to start: core/threads.py)
+    ahead = Done(model(0, min(block, n)))
+    for i, lo in enumerate(starts):
         hi = min(lo + block, n)
         check_x[i], check_P[i] = x, P
-        m, real = _split(model(lo, hi), 9)
+        m, real = _split(ahead.result(), 9)
         rows = m[0].shape[0]
-        xf, Pf, g = buf.take(rows)
+        xf, Pf, g = bufs[0].take(rows)
+        ahead = beside(model, hi, min(hi + block, n)) if hi < n else None
         x, P = _filter(x, P, m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
         gated[lo:hi] = g[:rows] if real is None else g[:real.size][real]
         store.put(i, xf[:rows], Pf[:rows])
-    xs_next, Ps_next = np.zeros(d), np.zeros((d, d))
-    for i in range(len(starts) - 1, -1, -1):  # backward, a block at a time
+    # backward, a block at a time: its filter (unless stored) and RTS here while a second
+    # thread hands the block before to ``keep`` and builds the next one's model (two buffers:
+    # ``keep`` reads one while the kernels write the other)
+    xs_next, Ps_next, done = np.zeros(d), np.zeros((d, d)), None
+    ahead = Done(_backward_model(model, starts, len(starts) - 1, block, n, store))
+    for i in range(len(starts) - 1, -1, -1):
         lo = starts[i]
         hi = min(lo + block, n)
-        kept = i in store.blocks  # else filtered again from the checkpoint
-        m, real = _split(model(lo, min(hi + 1, n), steps_only=kept),  # and the step into
-                         3 if kept else 9)  # the next frame
+        kept, m, real = ahead.result()
         rows = _rows_of(real, hi - lo, m[0].shape[0], hi == n)
-        xf, Pf, g = buf.take(m[0].shape[0])
+        xf, Pf, g = bufs[i % 2].take(m[0].shape[0])
         if kept:
             store.take(i, xf, Pf)
-        else:
-            _filter(check_x[i], check_P[i], m, rc, rk, gate, lo == 0, rows, xf, Pf, g)
-        F, b, Q = m[:3]
-        rts_block(xf, Pf, rows, F, b, Q, xs_next, Ps_next, hi == n)
-        if real is None:
-            keep(lo, hi, xf[:rows], Pf[:rows])
-        else:
-            keep(lo, hi, xf[:rows][real[:rows]], Pf[:rows][real[:rows]])
+        ahead = beside(_kept_and_ahead, keep, done, model, starts, i - 1, block, n, store)
+        _smooth_block(None if kept else (check_x[i], check_P[i]), m, rc, rk, gate, lo == 0,
+                      rows, xf, Pf, g, xs_next, Ps_next, hi == n)
+        done = (lo, hi, xf, Pf, rows, real)
         xs_next, Ps_next = xf[0].copy(), Pf[0].copy()
+    ahead.result()
+    if done is not None:
+        _keep(keep, *done)
     return gated
+
+
+def _kept_and_ahead(keep, done: tuple | None, model: Model, starts: list[int], i: int,
+                    block: int, n: int, store: _Store) -> tuple | None:
+    """The backward pass's second thread: the block smoothed last (``done``) to ``keep``, then
+    block i's model (_backward_model; None before the first block)."""
+    if done is not None:
+        _keep(keep, *done)
+    return _backward_model(model, starts, i, block, n, store) if i >= 0 else None
+
+
+def _backward_model(model: Model, starts: list[int], i: int, block: int, n: int,
+                    store: _Store) -> tuple:
+    """(kept, model arrays, real) of block i for the backward pass: the steps alone when the
+    store holds its filtered states, else everything its filter needs; with the step into the
+    next frame."""
+    lo = starts[i]
+    hi = min(lo + block, n)
+    kept = i in store.blocks  # else filtered again from the checkpoint
+    m, real = _split(model(lo, min(hi + 1, n), steps_only=kept), 3 if kept else 9)
+    return kept, m, real
+
+
+def _smooth_block(start, m, rc, rk, gate, first, rows, xf, Pf, g, xs_next, Ps_next, last):
+    """A block's filter from its checkpoint ``start`` = (x, P) (None: xf, Pf hold it already,
+    from the store), then its RTS pass from the next block's first smoothed state."""
+    if start is not None:
+        _filter(*start, m, rc, rk, gate, first, rows, xf, Pf, g)
+    F, b, Q = m[:3]
+    rts_block(xf, Pf, rows, F, b, Q, xs_next, Ps_next, last)
+
+
+def _keep(keep, lo: int, hi: int, xf: np.ndarray, Pf: np.ndarray, rows: int,
+          real: np.ndarray | None) -> None:
+    if real is None:
+        keep(lo, hi, xf[:rows], Pf[:rows])
+    else:
+        keep(lo, hi, xf[:rows][real[:rows]], Pf[:rows][real[:rows]])
 
 
 class _Store:

@@ -280,7 +280,7 @@ def _rts_into(x, P, F, b, Q, xs, Ps, w):
     _symmetrise(P)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # a second thread runs beside it (issue 15)
 def smooth(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate):
     """(xs (n, d), Ps (n, d, d), gated (n,) bool): the smoothed means and covariances."""
     n, d = F.shape[0], x0.size
@@ -299,7 +299,7 @@ def smooth(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate):
     return xf, Pf, gated
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # a second thread runs beside it (issue 15)
 def filter_block(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate, first, m,
                  xf, Pf, gated):
     """The forward filter over the first m rows of a block of frames (row j: frame lo + j, F[j]
@@ -316,7 +316,7 @@ def filter_block(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, use_k, rk, gate, fi
     return x, P
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # a second thread runs beside it (issue 15)
 def rts_block(xf, Pf, m, F, b, Q, xs_next, Ps_next, last):
     """Smooth a block's m filtered states (xf, Pf, overwritten) backwards; unless ``last`` (the
     block ends the session) from the next frame's smoothed state (xs_next, Ps_next) through

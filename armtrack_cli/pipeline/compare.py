@@ -11,6 +11,7 @@ from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_mar
 from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import ArmtrackError, DataError
 from armtrack_cli.core.methods import METHODS
+from armtrack_cli.core.threads import Deferred, Done
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
@@ -33,11 +34,15 @@ CHECK_SEARCH_S = 1.0  # a declared offset is checked within ±1 s of itself
 SYNC_PREFERENCE = ("arm-smoother", "pf-constraint", "ukf", "pf", "ekf", "inertial")  # best-tracking first
 
 
-def synchronised_truth(session: Session, trajs: dict, *, eye=None) -> tuple[Truth, dict]:
-    """The truth on the session clock, and how its offset was set: declared (and checked
-    against the data: a disagreement beyond 3 SD is a one-line warning) or "auto" (estimated
-    from the trajectory of the best method in ``trajs``, method -> trajectory table; with the
-    camera's centre ``eye`` (3,) m in W, from the residual across the camera's rays)."""
+def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool = False
+                       ) -> tuple[Truth, Deferred | Done]:
+    """The truth on the session clock, and how its offset was set (its ``result()``: a dict):
+    declared (and checked against the data: a disagreement beyond 3 SD is a one-line warning)
+    or "auto" (estimated from the trajectory of the best method in ``trajs``, method ->
+    trajectory table; with the camera's centre ``eye`` (3,) m in W, from the residual across
+    the camera's rays). With ``beside``, a declared offset's check (which cannot move the
+    truth, only warn) runs on a second thread while the caller scores (core/threads.py); its
+    warning comes with ``result()``, on the caller's thread."""
     gt = session.groundtruth
     declared = session.sync.groundtruth_offset_s != "auto"
     raw = read_truth(session, offset_s=0.0)
@@ -46,25 +51,50 @@ def synchronised_truth(session: Session, trajs: dict, *, eye=None) -> tuple[Trut
     joint = "wrist" if "wrist" in raw.xyz else next(iter(raw.xyz))
     est = columns(traj, [f"{joint}_x", f"{joint}_y", f"{joint}_z"])
     centre = session.offset_s("groundtruth_offset_s") if declared else 0.0
-    off = None if est is None else estimate_offset(
-        traj["t"], est, raw.t, raw.xyz[joint], raw.rate_hz,
-        search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S, centre_s=centre, eye=eye)
+    t_raw, x_raw, t_est = raw.t, raw.xyz[joint], traj["t"]  # bound now: the caller pops them
+
+    def check():
+        return None if est is None else estimate_offset(
+            t_est, est, t_raw, x_raw, raw.rate_hz,
+            search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S, centre_s=centre, eye=eye)
+
     if not declared:
+        off = check()
         if off is None:
             raise DataError(gt.file, f"its clock offset cannot be estimated: within ±{AUTO_SEARCH_S:g}"
                             f" s it never overlaps trajectory-{ref}.csv enough",
                             "declare [sync] groundtruth_offset_s in seconds")
         info = {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4), "from": "auto",
                 "estimated_with": ref}
-        return Truth(raw.t + off.estimate_s, raw.xyz, raw.rate_hz), info
+        return Truth(raw.t + off.estimate_s, raw.xyz, raw.rate_hz), Done(info)
+    truth = Truth(raw.t + centre, raw.xyz, raw.rate_hz)
+    if beside:
+        return truth, _Checked(gt.file, centre, ref, 0.5 / raw.rate_hz, Deferred(check))
+    return truth, Done(_judged(gt.file, centre, ref, 0.5 / raw.rate_hz, check()))
+
+
+class _Checked:
+    """A declared offset's check on its thread; ``result()``: _judged's dict (and warning)."""
+
+    def __init__(self, file, centre: float, ref: str, slack: float, pending: Deferred):
+        self.args, self.pending = (file, centre, ref, slack), pending
+
+    def result(self) -> dict:
+        return _judged(*self.args, self.pending.result())
+
+
+def _judged(file, centre: float, ref: str, slack: float, off) -> dict:
+    """How a declared offset was set, with the data's estimate (from trajectory-``ref``) and
+    SD; one warning line when they disagree by more than 3 SD plus ``slack`` (half the truth's
+    sample period)."""
     info = {"value": centre, "from": "declared"}
     if off is not None:
         info.update(estimate=round(off.estimate_s, 4), sd=round(off.sd_s, 4), estimated_with=ref)
-        if abs(off.estimate_s - centre) > 3 * off.sd_s + 0.5 / raw.rate_hz:
-            warnings.warn(f"{gt.file}: the data put its clock offset at {off.estimate_s:+.3f} ± "
+        if abs(off.estimate_s - centre) > 3 * off.sd_s + slack:
+            warnings.warn(f"{file}: the data put its clock offset at {off.estimate_s:+.3f} ± "
                           f"{off.sd_s:.3f} s, not the declared {centre:+.3f} s; check [sync] "
                           "groundtruth_offset_s", stacklevel=1)
-    return Truth(raw.t + centre, raw.xyz, raw.rate_hz), info
+    return info
 
 
 def _camera_centre(work: Path):
@@ -76,20 +106,11 @@ def _camera_centre(work: Path):
         return None
 
 
-def compare(path: str | Path, *, methods: tuple[str, ...] = (),
-            out: str | Path | None = None) -> dict[str, Any]:
-    session = load_session(path)
-    require(session, "groundtruth")
-    if session.palm is not None:  # Cordella et al.: pipeline/palm.py
-        from armtrack_cli.pipeline.palm import compare_palm  # its libraries only when needed
-
-        return compare_palm(session, out_dir(session, out), methods)
-    work = WorkFolder(out_dir(session, out))
-    methods = tuple(methods) or work.trajectories(METHODS)
-    if not methods:
-        raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    trajs = {m: trajectory_columns(work / f"trajectory-{m}.csv") for m in methods}
-    truth, offset = synchronised_truth(session, trajs, eye=_camera_centre(work.path))
+def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
+            ) -> tuple[list, list, dict]:
+    """errors.csv's rows, measures.csv's rows and the frames without truth, of every method
+    in ``trajs`` against ``truth`` (on the session clock), whose markers are taken out of it
+    as they are used (truth.xyz is left empty)."""
     rows, mrows, excluded = [], [], {}
     for m, traj in trajs.items():
         t = traj["t"]
@@ -106,7 +127,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     # filtered at its own rate, as labs do, a joint at a time: each joint's raw markers are
     # dropped as its filtered ones are made (scored: a 60-minute capture's three joints held
     # twice were 26 MB more; issue 15)
-    t_truth, rate, raw = truth.t, truth.rate_hz, dict(truth.xyz)
+    t_truth, rate, raw = truth.t, truth.rate_hz, truth.xyz
     del truth
     for_measures = Truth(t_truth, {}, rate)
     for joint in list(raw):
@@ -117,6 +138,28 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
         mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"),
                                     truth_inputs(trajectory_inputs(traj, session), session,
                                                  truth_markers(traj["t"], for_measures)))
+    return rows, mrows, excluded
+
+
+def compare(path: str | Path, *, methods: tuple[str, ...] = (),
+            out: str | Path | None = None) -> dict[str, Any]:
+    session = load_session(path)
+    require(session, "groundtruth")
+    if session.palm is not None:  # Cordella et al.: pipeline/palm.py
+        from armtrack_cli.pipeline.palm import compare_palm  # its libraries only when needed
+
+        return compare_palm(session, out_dir(session, out), methods)
+    work = WorkFolder(out_dir(session, out))
+    methods = tuple(methods) or work.trajectories(METHODS)
+    if not methods:
+        raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
+    trajs = {m: trajectory_columns(work / f"trajectory-{m}.csv") for m in methods}
+    truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
+                                        beside=True)  # a declared offset's check beside
+    try:
+        rows, mrows, excluded = _scored(session, work, trajs, truth)
+    finally:  # the check's estimate (and its warning) before any error of the scoring's
+        offset = pending.result()
     with output_set():
         write_rows(work / "errors.csv", rows, columns=COLUMNS, command="compare",
                    settings={"methods": list(methods), "excluded_frames": excluded,

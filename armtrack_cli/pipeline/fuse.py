@@ -54,13 +54,18 @@ class Prepared:
     inputs: Inputs  # per filtered frame: IMU step, detection, orientation
     projection: models.Projection
     arm: models.Arm | None
-    imu_offset: dict  # [sync] imu_offset_s: value, and its estimate and SD (imu_offset.py)
+    imu_offset: Any  # [sync] imu_offset_s: its result() the value, its estimate and SD
+    #                  (imu_offset.py; a declared value's check perhaps still running beside)
     q_anchored: np.ndarray | None  # (M, 4) inputs.imu's orientations with their wandering
     #                  error replaced by a constant one (fuse/gyro_orientation.py), for the
     #                  arm estimate ([arm] "auto"); None once that is done
 
 
-def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
+def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False
+            ) -> Prepared:
+    """The session's inputs on its clock; with ``beside``, a declared IMU offset's check is
+    left to run on a second thread from ``imu_offset.start()``, beside the caller's work
+    (pipeline/imu_offset.py); ``imu_offset.result()`` waits for it."""
     from armtrack_cli.session.tables import read_patch_detections
 
     require(session, "imu")
@@ -86,7 +91,8 @@ def prepare(session: Session, dest: Path, s: FuseSettings) -> Prepared:
     known = arm if session.arm is None or not session.arm.auto else None  # "auto": not yet
     q_anch = gyro_anchored(imu.t[ok], q_imu, imu.gyr[ok])
     offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_anch,
-                                     models.accel_world(q_anch, imu.acc[ok]), t_f, uv, proj, known)
+                                     models.accel_world(q_anch, imu.acc[ok]), t_f, uv, proj, known,
+                                     beside=beside)
     t_imu = imu.t[ok] + offset  # session time = stream time + offset
     a_w = models.accel_world(q_imu, imu.acc[ok])  # Tao & Hu eq. 4; after the offset check,
     #                                               whose own arrays peak (issue 15)
@@ -137,7 +143,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         raise ConfigError(session.toml_path, f"has no [arm] section, which {s.method} needs",
                           "use inertial, ekf, ukf or pf, or add the arm model")
     dest = out_dir(session, out)
-    p = prepare(session, dest, s)
+    p = prepare(session, dest, s, beside=True)  # the offset's check: started below
     auto = None
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
         from armtrack_cli.pipeline import arm_model
@@ -152,14 +158,12 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     p = dataclasses.replace(p, q_anchored=None,
                             inputs=dataclasses.replace(p.inputs, release_imu=True))
     inp = p.inputs
-    release_memory()  # reading and the offset's check freed more than they kept
+    release_memory()  # reading freed more than it kept (the offset's check runs later, beside)
     x0, P0, how = _initial_state(session, p, s)
     start = time.perf_counter()
     load_kernels(s.method)  # numba's one-time set-up, timed apart: frames_per_s is the filter's
     setup = time.perf_counter() - start
-    start, cpu = time.perf_counter(), time.process_time()
-    est = run(s.method, inp, x0, P0, p.projection, s, p.arm)
-    elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
+    est, elapsed, cpu, offset = _timed_run(s, p, x0, P0)
     release_memory()  # the method's working arrays, before the trajectory and its measures
     from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
 
@@ -184,10 +188,10 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
                 "frames_beyond_reach": int(far.sum()), **guards, **(est.summary or {}),
                 **({"arm_auto": auto.as_dict()} if auto else {}),
-                "imu_offset_s": p.imu_offset}
+                "imu_offset_s": offset}
     q_WB = np.full((p.t_frames.size, 4), np.nan)  # the IMU at each row, for forearm rotation
     q_WB[p.frames] = inp.q_WB if est.q_WB is None else est.q_WB
-    n, summary, offset = int(p.frames.size), est.summary or {}, p.imu_offset
+    n, summary = int(p.frames.size), est.summary or {}
     used = int(np.isfinite(inp.z).all(axis=1).sum())
     del est, p, inp  # the filter's per-frame arrays, before the measures' draws
     release_memory()  # … and their pages
@@ -200,6 +204,31 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             "frames_beyond_reach": int(far.sum()), **guards, **summary,
             **({"arm_auto": auto.as_dict()} if auto else {}),
             "imu_offset_s": offset}
+
+
+def _timed_run(s: FuseSettings, p: Prepared, x0: np.ndarray, P0: np.ndarray
+               ) -> tuple[Any, float, float, dict]:
+    """The method run on p's inputs, timed: (estimates, seconds, cpu_seconds, how the IMU's
+    offset was set). A declared offset's check runs beside the compiled forward pass (no GIL
+    held) and is waited for when that pass ends, before the smoothers, whose memory peaks
+    (issue 15); the wait is not the filter's time. cpu_seconds: this thread's, not the
+    check's (nor the arm smoother's model building, when a free core takes it:
+    fuse/smoother_blocks.py)."""
+    check, waited = p.imu_offset, []
+    check.start()
+
+    def forward_done() -> None:
+        t = time.perf_counter()
+        check.result()
+        waited.append(time.perf_counter() - t)
+
+    start, cpu = time.perf_counter(), time.thread_time()
+    try:
+        est = run(s.method, p.inputs, x0, P0, p.projection, s, p.arm, forward_done=forward_done)
+        elapsed, cpu = time.perf_counter() - start - sum(waited), time.thread_time() - cpu
+    finally:  # the offset's check (and its warning) before any error of the filter's
+        offset = check.result()
+    return est, elapsed, cpu, offset
 
 
 def _write(dest: Path, method: str, table, session: Session, q_WB: np.ndarray,

@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from armtrack_cli.core.errors import DataError
+from armtrack_cli.core.threads import Deferred, Done
 from armtrack_cli.fuse import models
-from armtrack_cli.fuse.imu_sync import SyncProblem, estimate_imu_offset
+from armtrack_cli.fuse.imu_sync import ImuOffset, SyncProblem, estimate_imu_offset
 
 AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
 CHECK_SEARCH_S = 0.5  # a declared offset is checked within ±0.5 s of itself
@@ -21,30 +22,73 @@ WARN_FLOOR_S = 0.05  # … and warned about beyond 3 SD and beyond this: the est
 #                      unmodelled errors may not (docs/validation-sync.md)
 
 
+BESIDE_MAX_SAMPLES = 120_000  # a declared offset's check runs on a second thread, beside the
+#                              filter, for an IMU of at most this many samples (a 10-minute
+#                              session has 60,000); a longer one's check runs first, alone, so
+#                              that its arrays and the filter's do not peak together (issue 15)
+
+
 def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndarray,
                        a_W: np.ndarray, t_frames: np.ndarray, uv: np.ndarray,
-                       proj: models.Projection, arm: models.Arm | None
-                       ) -> tuple[float, dict]:
-    """The offset to use (s; session time = IMU time + offset) and how it was set.
-    t_imu, q_WB, a_W: the IMU's valid samples on its own clock; t_frames, uv: the
-    detections on the session clock (NaN = none)."""
+                       proj: models.Projection, arm: models.Arm | None, *,
+                       beside: bool = False) -> tuple[float, Deferred | Done]:
+    """The offset to use (s; session time = IMU time + offset) and how it was set (its
+    ``result()``: a dict). t_imu, q_WB, a_W: the IMU's valid samples on its own clock;
+    t_frames, uv: the detections on the session clock (NaN = none). With ``beside``, a
+    declared offset's check (which cannot change the offset used, only warn) runs on a second
+    thread while the caller goes on (core/threads.py); its warning comes with ``result()``,
+    on the caller's thread."""
     declared = session.sync.imu_offset_s != "auto"
     centre = float(session.sync.imu_offset_s) if declared else 0.0
     if declared and session.arm is not None and session.arm.auto:
         # the check takes its depths from the arm, which fuse estimates after the offset; it
         # checks then (pipeline/arm_model.estimate_with_offset)
-        return centre, {"value": centre, "from": "declared",
-                        "unchecked": '[arm] is "auto": estimated after the offset'}
+        return centre, Done({"value": centre, "from": "declared",
+                             "unchecked": '[arm] is "auto": estimated after the offset'})
     problem = SyncProblem(t_imu, a_W, q_WB, t_frames, uv, proj, arm)
-    off = estimate_imu_offset(problem, centre_s=centre,
-                              search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S)
-    if not declared:
-        if off is None or not np.isfinite(off.sd_s):
-            raise DataError(imu_file, "its clock offset cannot be estimated: within "
-                            f"±{AUTO_SEARCH_S:g} s too few frames with a detection meet the "
-                            "IMU's recording", "declare [sync] imu_offset_s in seconds")
-        return off.estimate_s, {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4),
-                                "from": "auto", "frames": off.frames}
+    search = CHECK_SEARCH_S if declared else AUTO_SEARCH_S
+    if declared:
+        if beside and t_imu.size <= BESIDE_MAX_SAMPLES:
+            return centre, _Checked(imu_file, centre, problem, search)
+        return centre, Done(_judged(imu_file, centre, estimate_imu_offset(
+            problem, centre_s=centre, search_s=search)))
+    off = estimate_imu_offset(problem, centre_s=centre, search_s=search)
+    if off is None or not np.isfinite(off.sd_s):
+        raise DataError(imu_file, "its clock offset cannot be estimated: within "
+                        f"±{AUTO_SEARCH_S:g} s too few frames with a detection meet the "
+                        "IMU's recording", "declare [sync] imu_offset_s in seconds")
+    return off.estimate_s, Done({"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4),
+                                 "from": "auto", "frames": off.frames})
+
+
+class _Checked:
+    """A declared offset's check, run on a thread of its own from ``start()`` (the caller
+    starts it where its own work lets go of the GIL: fuse, before the filter's compiled
+    kernels, after numba's set-up, whose Python it would slow); ``result()``: _judged's dict
+    (and warning), the check run here if it was never started."""
+
+    def __init__(self, imu_file: Path, centre: float, problem: SyncProblem, search_s: float):
+        self.imu_file, self.centre = imu_file, centre
+        self.args, self.job, self.info = (problem,), None, None
+        self.kwargs = {"centre_s": centre, "search_s": search_s}
+
+    def start(self) -> None:
+        if self.job is None:
+            self.job = Deferred(estimate_imu_offset, *self.args, **self.kwargs)
+            self.args = ()  # the problem's arrays held by the thread alone
+
+    def result(self) -> dict:
+        """The dict, judged (and warned about) once; asked again, the same dict."""
+        if self.info is None:
+            off = (estimate_imu_offset(*self.args, **self.kwargs) if self.job is None
+                   else self.job.result())
+            self.info, self.job, self.args = _judged(self.imu_file, self.centre, off), None, ()
+        return self.info
+
+
+def _judged(imu_file: Path, centre: float, off: ImuOffset | None) -> dict:
+    """How a declared offset was set, with the data's estimate and SD; one warning line when
+    they disagree by more than 3 SD (and WARN_FLOOR_S)."""
     info = {"value": centre, "from": "declared"}
     if off is not None and np.isfinite(off.sd_s):
         info.update(estimate=round(off.estimate_s, 4), sd=round(off.sd_s, 4))
@@ -52,4 +96,4 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
             warnings.warn(f"{imu_file}: the data put its clock offset at {off.estimate_s:+.3f} "
                           f"± {off.sd_s:.3f} s, not the declared {centre:+.3f} s; check [sync] "
                           "imu_offset_s", stacklevel=1)
-    return centre, info
+    return info
