@@ -356,7 +356,7 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
                if s.rest_velocity_sd_m_s > 0 else None)
     r = arm_smoother.run(imu, inp.t, inp.z, inp.q_WB, first, x0, P0, proj, s, arm)
     th = r.x[:, arm_smoother.TH]
-    summary = {"detections_gated": int(r.gated.sum()), "smoother_iterations": r.iterations,
+    summary = {"detections_gated": int(r.gated.sum()), "smoother_iterations_run": r.iterations,
                "start_runs_moved": r.runs_moved,
                "accel_bias_m_s2": [round(float(v), 4) for v in r.x[-1, arm_smoother.BA]],
                "orientation_error_rms_deg": round(float(np.degrees(
