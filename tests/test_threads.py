@@ -99,3 +99,25 @@ def test_declared_offsets_check_beside_equals_it_inline():
     assert inline_info == beside_info and abs(inline_info["estimate"] - 0.2) < 0.02
     warned = [str(w.message) for w in seen if "clock offset" in str(w.message)]
     assert len(warned) == 2 and warned[0] == warned[1], warned
+
+
+def test_lazy_runs_on_its_thread_once_started_else_on_the_callers():
+    here = threading.get_ident()
+    started = threads.Lazy(threading.get_ident)
+    started.start()
+    started.start()  # a second start starts nothing more
+    assert started.result() != here
+    assert threads.Lazy(threading.get_ident).result() == here  # never started: made here
+
+
+def test_then_applies_its_function_once_on_the_callers_thread():
+    calls = []
+
+    def judge(v):
+        calls.append(threading.get_ident())
+        return v + 1
+
+    got = threads.Then(threads.Lazy(sum, [1, 2]), judge)
+    got.start()
+    assert got.result() == got.result() == 4
+    assert calls == [threading.get_ident()]

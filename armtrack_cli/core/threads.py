@@ -1,6 +1,8 @@
 """Work beside the main thread (issue 15: the machine has two cores and fuse or compare kept
 one busy): ``Deferred(fn, *args)`` starts fn(*args) on its own thread, ``result()`` waits for
-it and returns its value or raises its exception, on the caller's thread. Only for work whose
+it and returns its value or raises its exception, on the caller's thread; ``Lazy`` starts it
+only when asked to (``start()``), ``Then`` applies a function to its value once, on the
+caller's thread (a declared clock offset's check and its warning). Only for work whose
 time goes to code that lets go of the GIL (numpy's array operations, numba kernels compiled
 with ``nogil=True``); pure-Python work on two threads takes as long as on one.
 
@@ -79,6 +81,45 @@ class Done:
         """Nothing to start (a deferred check's ``start``)."""
 
     def result(self) -> Any:
+        return self._value
+
+
+class Lazy:
+    """fn(*args, **kwargs) on a thread of its own from ``start()`` (the caller starts it where
+    its own work lets go of the GIL); ``result()`` its value, the call made there and then if
+    it was never started. Once started, the arguments are held by the thread alone."""
+
+    def __init__(self, fn: Callable[..., Any], *args: Any, **kwargs: Any):
+        self._call: tuple | None = (fn, args, kwargs)
+        self._job: Deferred | None = None
+
+    def start(self) -> None:
+        if self._call is not None:
+            fn, args, kwargs = self._call
+            self._call, self._job = None, Deferred(fn, *args, **kwargs)
+
+    def result(self) -> Any:
+        if self._call is not None:
+            fn, args, kwargs = self._call
+            self._call, self._job = None, Done(fn(*args, **kwargs))
+        return self._job.result()
+
+
+class Then:
+    """``fn(pending.result())``, made once on the caller's thread when ``result()`` is first
+    asked (a check's judgement and its warning: on the main thread, once); ``start()`` starts
+    ``pending`` where it has a start."""
+
+    def __init__(self, pending: Any, fn: Callable[[Any], Any]):
+        self._pending, self._fn, self._value = pending, fn, None
+
+    def start(self) -> None:
+        if self._pending is not None and hasattr(self._pending, "start"):
+            self._pending.start()
+
+    def result(self) -> Any:
+        if self._pending is not None:
+            self._value, self._pending = self._fn(self._pending.result()), None
         return self._value
 
 

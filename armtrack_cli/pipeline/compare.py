@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -11,7 +12,7 @@ from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_mar
 from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import ArmtrackError, DataError
 from armtrack_cli.core.methods import METHODS
-from armtrack_cli.core.threads import Deferred, Done
+from armtrack_cli.core.threads import Deferred, Done, Then
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
@@ -35,7 +36,7 @@ SYNC_PREFERENCE = ("arm-smoother", "pf-constraint", "ukf", "pf", "ekf", "inertia
 
 
 def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool = False
-                       ) -> tuple[Truth, Deferred | Done]:
+                       ) -> tuple[Truth, Then | Done]:
     """The truth on the session clock, and how its offset was set (its ``result()``: a dict):
     declared (and checked against the data: a disagreement beyond 3 SD is a one-line warning)
     or "auto" (estimated from the trajectory of the best method in ``trajs``, method ->
@@ -69,18 +70,9 @@ def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool 
         return Truth(raw.t + off.estimate_s, raw.xyz, raw.rate_hz), Done(info)
     truth = Truth(raw.t + centre, raw.xyz, raw.rate_hz)
     if beside:
-        return truth, _Checked(gt.file, centre, ref, 0.5 / raw.rate_hz, Deferred(check))
+        return truth, Then(Deferred(check), partial(_judged, gt.file, centre, ref,
+                                                   0.5 / raw.rate_hz))
     return truth, Done(_judged(gt.file, centre, ref, 0.5 / raw.rate_hz, check()))
-
-
-class _Checked:
-    """A declared offset's check on its thread; ``result()``: _judged's dict (and warning)."""
-
-    def __init__(self, file, centre: float, ref: str, slack: float, pending: Deferred):
-        self.args, self.pending = (file, centre, ref, slack), pending
-
-    def result(self) -> dict:
-        return _judged(*self.args, self.pending.result())
 
 
 def _judged(file, centre: float, ref: str, slack: float, off) -> dict:

@@ -6,12 +6,13 @@ line when a declared value disagrees with the data by more than 3 SD (and WARN_F
 from __future__ import annotations
 
 import warnings
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from armtrack_cli.core.errors import DataError
-from armtrack_cli.core.threads import Deferred, Done
+from armtrack_cli.core.threads import Done, Lazy, Then
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.imu_sync import ImuOffset, SyncProblem, estimate_imu_offset
 
@@ -31,7 +32,7 @@ BESIDE_MAX_SAMPLES = 120_000  # a declared offset's check runs on a second threa
 def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndarray,
                        a_W: np.ndarray, t_frames: np.ndarray, uv: np.ndarray,
                        proj: models.Projection, arm: models.Arm | None, *,
-                       beside: bool = False) -> tuple[float, Deferred | Done]:
+                       beside: bool = False) -> tuple[float, Then | Done]:
     """The offset to use (s; session time = IMU time + offset) and how it was set (its
     ``result()``: a dict). t_imu, q_WB, a_W: the IMU's valid samples on its own clock;
     t_frames, uv: the detections on the session clock (NaN = none). With ``beside``, a
@@ -49,7 +50,8 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
     search = CHECK_SEARCH_S if declared else AUTO_SEARCH_S
     if declared:
         if beside and t_imu.size <= BESIDE_MAX_SAMPLES:
-            return centre, _Checked(imu_file, centre, problem, search)
+            return centre, Then(Lazy(estimate_imu_offset, problem, centre_s=centre,
+                                     search_s=search), partial(_judged, imu_file, centre))
         return centre, Done(_judged(imu_file, centre, estimate_imu_offset(
             problem, centre_s=centre, search_s=search)))
     off = estimate_imu_offset(problem, centre_s=centre, search_s=search)
@@ -59,31 +61,6 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
                         "IMU's recording", "declare [sync] imu_offset_s in seconds")
     return off.estimate_s, Done({"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4),
                                  "from": "auto", "frames": off.frames})
-
-
-class _Checked:
-    """A declared offset's check, run on a thread of its own from ``start()`` (the caller
-    starts it where its own work lets go of the GIL: fuse, before the filter's compiled
-    kernels, after numba's set-up, whose Python it would slow); ``result()``: _judged's dict
-    (and warning), the check run here if it was never started."""
-
-    def __init__(self, imu_file: Path, centre: float, problem: SyncProblem, search_s: float):
-        self.imu_file, self.centre = imu_file, centre
-        self.args, self.job, self.info = (problem,), None, None
-        self.kwargs = {"centre_s": centre, "search_s": search_s}
-
-    def start(self) -> None:
-        if self.job is None:
-            self.job = Deferred(estimate_imu_offset, *self.args, **self.kwargs)
-            self.args = ()  # the problem's arrays held by the thread alone
-
-    def result(self) -> dict:
-        """The dict, judged (and warned about) once; asked again, the same dict."""
-        if self.info is None:
-            off = (estimate_imu_offset(*self.args, **self.kwargs) if self.job is None
-                   else self.job.result())
-            self.info, self.job, self.args = _judged(self.imu_file, self.centre, off), None, ()
-        return self.info
 
 
 def _judged(imu_file: Path, centre: float, off: ImuOffset | None) -> dict:
