@@ -23,7 +23,6 @@ from collections.abc import Callable
 import numpy as np
 
 from armtrack_cli.core import threads
-from armtrack_cli.core.threads import Done
 from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
 
 BLOCK = 1024  # frames per block: ~2 MB of covariances at d = 15
@@ -58,7 +57,7 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
     # forward: checkpoints, the gate's decisions, the store; each block's filter (a compiled
     # kernel that holds no GIL) here while a second thread builds the next block's model (the
     # kernel never waits for the GIL to start: core/threads.py)
-    ahead = Done(model(0, min(block, n)))
+    ahead = threads.Done(model(0, min(block, n)))
     for i, lo in enumerate(starts):
         hi = min(lo + block, n)
         check_x[i], check_P[i] = x, P
@@ -73,7 +72,7 @@ def smooth_blocked(x0: np.ndarray, P0: np.ndarray, model: Model, n: int, *, rc: 
     # thread hands the block before to ``keep`` and builds the next one's model (two buffers:
     # ``keep`` reads one while the kernels write the other)
     xs_next, Ps_next, done = np.zeros(d), np.zeros((d, d)), None
-    ahead = Done(_backward_model(model, starts, len(starts) - 1, block, n, store))
+    ahead = threads.Done(_backward_model(model, starts, len(starts) - 1, block, n, store))
     for i in range(len(starts) - 1, -1, -1):
         lo = starts[i]
         hi = min(lo + block, n)
