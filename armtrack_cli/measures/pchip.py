@@ -29,11 +29,10 @@ def slopes(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     flat = (smk[1:] != smk[:-1]) | (mk[1:] == 0) | (mk[:-1] == 0)  # a turn: slope 0
     w1 = 2 * hk[1:] + hk[:-1]
     w2 = hk[1:] + 2 * hk[:-1]
+    dk = np.empty_like(y)
     with np.errstate(divide="ignore", invalid="ignore"):
         whmean = (w1 / mk[:-1] + w2 / mk[1:]) / (w1 + w2)
-    dk = np.zeros_like(y)
-    dk[1:-1][flat] = 0.0
-    dk[1:-1][~flat] = 1.0 / whmean[~flat]
+        dk[1:-1] = np.where(flat, 0.0, 1.0 / whmean)  # (no boolean gathers: ~2× faster)
     dk[0] = _edge(hk[0], hk[1], mk[0], mk[1])
     dk[-1] = _edge(hk[-1], hk[-2], mk[-1], mk[-2])
     return dk
@@ -50,10 +49,11 @@ def pchip(x: np.ndarray, y: np.ndarray, xi: np.ndarray) -> np.ndarray:
     c0, c1, c2, c3 = t / dx, (slope - dydx[:-1]) / dx - t, dydx[:-1], y[:-1]
     i = np.clip(np.searchsorted(x, xi, side="right") - 1, 0, x.size - 2)
     s = (xi - x[i])[:, None]
-    res = c3[i] * 1.0  # Σ c_k s^(3−k), accumulated as scipy's PPoly evaluates it
-    z = s
-    res = res + c2[i] * z
+    res = c3.take(i, axis=0)  # Σ c_k s^(3−k), accumulated as scipy's PPoly evaluates it
+    z = s  #                    (from c3 · 1.0: the same bits)
+    res += c2.take(i, axis=0) * z
     z = z * s
-    res = res + c1[i] * z
+    res += c1.take(i, axis=0) * z
     z = z * s
-    return res + c0[i] * z
+    res += c0.take(i, axis=0) * z
+    return res
