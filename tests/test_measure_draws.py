@@ -179,3 +179,21 @@ def test_angle_draws_are_each_draws_angle_values():
     plane = angle_draws(inp, ew, None, S)[("shoulder_plane_rom", "session")]
     assert np.isnan(plane[-1]) and np.isfinite(plane[:-1]).all()
     assert (plane[:-1] > 180).all()  # unwrapped through ±180°
+
+
+def test_spread_rows_is_spread_row_by_row():
+    """Rows without a NaN through one np.std call, the others alone: spread's values exactly
+    (rows of every scale; a few NaN; more than half NaN: none)."""
+    from armtrack_cli.measures.uncertainty import spread_rows
+
+    rng = np.random.default_rng(9)
+    x = rng.standard_normal((300, 40)) * 10.0 ** rng.uniform(-6, 3, (300, 1)) + \
+        rng.uniform(-100, 100, (300, 1))
+    x[5, 3] = np.nan
+    x[6, :25] = np.nan
+    x[7] = np.nan
+    got = spread_rows(x)
+    want = np.array([spread(r) for r in x])
+    np.testing.assert_array_equal(got, want)
+    assert np.isfinite(got[5]) and np.isnan(got[6]) and np.isnan(got[7])
+    assert np.isnan(spread_rows(x[:, :1])).all()

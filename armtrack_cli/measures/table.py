@@ -14,7 +14,7 @@ from armtrack_cli.measures.base import DEFAULT, ONE_MOVEMENT, NotComputable, Set
 from armtrack_cli.measures.draws import PathDraws
 from armtrack_cli.measures.segments import segments
 from armtrack_cli.measures.signal import speed_profile
-from armtrack_cli.measures.uncertainty import draw_blocks, spread
+from armtrack_cli.measures.uncertainty import draw_blocks, spread_rows
 
 REACH_TASKS = ("reach", "reach-grasp")
 ANGLES = {  # name: unit with its convention
@@ -182,7 +182,7 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
         for i, k in enumerate(keys):
             got[i, done:done + c] = by_path.get(k, by_angle.get(k, np.nan))
         done += c
-    return {k: spread(got[i]) for i, k in enumerate(keys)}
+    return dict(zip(keys, spread_rows(got).tolist()))
 
 
 def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None) -> list[dict]:
