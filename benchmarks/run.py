@@ -287,13 +287,21 @@ def stage(code: str, env: dict | None = None) -> tuple[float, float, str]:
 
 
 def warm_numba(tmp: str) -> tuple:
-    """numba's one-time compile, measured, then its cache made warm, as an install leaves it:
+    """numba's one-time compile, measured, then its cache (and armtrack's bytecode) made warm,
+    as an install leaves them:
     `pipeline.run` on circle-01 through fuse (every kernel detect and the default method
     use) in a throw-away process with an empty NUMBA_CACHE_DIR (it compiles everything: the
     row's seconds and peak memory), then again with the user's cache (it compiles only what a
     source change made stale), so that the end-to-end rows measure the stages, not the
     compiler."""
+    import compileall
     import tempfile
+
+    # armtrack's bytecode too, as an install leaves it (pip compiles it; an editable install
+    # writes it on first import, unless PYTHONDONTWRITEBYTECODE is set, as it is on this
+    # machine: each stage's process then compiled every armtrack module it imported from
+    # source, ~0.05 s a stage, 0.15-0.25 s over calibrate, fuse and compare)
+    compileall.compile_dir(REPO / "armtrack_cli", quiet=1)
 
     def code(out: str) -> str:
         return (f"pipeline.run({str(SAMPLES / 'circle-01')!r}, through='fuse', "

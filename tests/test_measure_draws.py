@@ -133,3 +133,67 @@ def test_measure_sds_are_the_draw_by_draw_loops(task):
             assert np.isnan(r["sd"]), k
         else:
             assert r["sd"] == pytest.approx(want, rel=1e-12), k
+
+
+def test_angle_draws_are_each_draws_angle_values():
+    """angle_draws (a block of draws at once) against table.angle_values one draw at a time:
+    an elbow hanging near the plane of elevation's gimbal lock (each draw's plane NaN on
+    frames of its own, unwrapped on its own), one draw held below it throughout (no plane:
+    not computable), a missing stretch, and wrist angles with a posterior of their own."""
+    from armtrack_cli.measures.angle_draws import angle_draws
+    from armtrack_cli.measures.table import angle_values
+
+    t = np.arange(300) / 30.0
+    rng = np.random.default_rng(8)
+    shoulder = np.array([0.1, -0.2, 1.2])
+    swing = np.radians(12.0) * np.sin(2 * np.pi * t / 4)[:, None]  # elevation ~0-12°
+    az = np.radians(200.0) * t[:, None] / t[-1]  # plane of elevation through ±180°
+    u = np.c_[np.sin(swing[:, 0]) * np.cos(az[:, 0]), np.sin(swing[:, 0]) * np.sin(az[:, 0]),
+              -np.cos(swing[:, 0])]
+    elbow = shoulder + 0.3 * u
+    wrist = elbow + np.array([0.0, -0.27, 0.05])
+    elbow[100:104] = wrist[100:104] = np.nan
+    wa = np.c_[20 * np.sin(t), 10 * np.cos(t), 5 * t]
+    inp = Inputs(t=t, wrist=wrist, elbow=elbow, shoulder=shoulder, wrist_angles=wa,
+                 q_WB=np.tile([1.0, 0, 0, 0], (300, 1)), forearm_axis=np.array([0, 1.0, 0]))
+    c = 6
+    ew = 0.01 * np.cumsum(rng.standard_normal((c, 300, 3)), axis=1) / 10
+    ew[-1] = shoulder + [0.0, 0.0, -0.3] - elbow  # the elbow straight down: no plane
+    ew[-1, 100:104] = 0.0
+    ea = 0.5 * rng.standard_normal((c, 300, 3))
+    for e_w, e_a in [(ew, ea), (ew, None), (None, ea)]:
+        got = angle_draws(inp, e_w, e_a, S)
+        for i in range(c):
+            d = replace(inp, q_WB=None)
+            if e_w is not None:
+                d = replace(d, wrist=wrist + e_w[i], elbow=elbow + e_w[i])
+            if e_a is not None:
+                d = replace(d, wrist_angles=wa + e_a[i])
+            want = angle_values(d, S)
+            assert set(got) == set(want) - {k for k in want if k[0].startswith("forearm")}
+            for k, x in got.items():
+                if isinstance(want[k], str):
+                    assert np.isnan(x[i]), (k, i)
+                else:
+                    assert x[i] == pytest.approx(want[k], rel=1e-12, abs=1e-12), (k, i)
+    plane = angle_draws(inp, ew, None, S)[("shoulder_plane_rom", "session")]
+    assert np.isnan(plane[-1]) and np.isfinite(plane[:-1]).all()
+    assert (plane[:-1] > 180).all()  # unwrapped through ±180°
+
+
+def test_spread_rows_is_spread_row_by_row():
+    """Rows without a NaN through one np.std call, the others alone: spread's values exactly
+    (rows of every scale; a few NaN; more than half NaN: none)."""
+    from armtrack_cli.measures.uncertainty import spread_rows
+
+    rng = np.random.default_rng(9)
+    x = rng.standard_normal((300, 40)) * 10.0 ** rng.uniform(-6, 3, (300, 1)) + \
+        rng.uniform(-100, 100, (300, 1))
+    x[5, 3] = np.nan
+    x[6, :25] = np.nan
+    x[7] = np.nan
+    got = spread_rows(x)
+    want = np.array([spread(r) for r in x])
+    np.testing.assert_array_equal(got, want)
+    assert np.isfinite(got[5]) and np.isnan(got[6]) and np.isnan(got[7])
+    assert np.isnan(spread_rows(x[:, :1])).all()

@@ -55,7 +55,16 @@ def test_pchip_is_scipys_bit_for_bit():
         if trial % 3 == 0:
             y[rng.integers(0, n, n // 3)] = 0.5  # flat runs and turns
         xi = np.linspace(x[0], x[-1] + 1e-9, int(rng.integers(1, 300)))
-        assert np.array_equal(pchip(x, y, xi), PchipInterpolator(x, y, axis=0)(xi))
+        want = PchipInterpolator(x, y, axis=0)(xi)
+        assert np.array_equal(pchip(x, y, xi), want)
+        # a block of points at a time: each block's slopes from a window of the knots
+        assert np.array_equal(pchip(x, y, xi, block=int(rng.integers(1, 40))), want)
+    x = np.cumsum(rng.uniform(0.001, 0.05, 5000))  # beyond the knots, and a block of one
+    y = np.cumsum(rng.standard_normal((5000, 2)), axis=0)
+    xi = np.r_[x[0] - 0.3, np.sort(rng.uniform(x[0], x[-1], 3000)), x[-1] + 0.2]
+    want = PchipInterpolator(x, y, axis=0)(xi)
+    for block in (1, 2, 3, 999, 4096):
+        assert np.array_equal(pchip(x, y, xi, block=block), want)
 
 
 @pytest.mark.parametrize("grid_max, table_max", [(200_000, peaks.TABLE_MAX), (0, peaks.TABLE_MAX),

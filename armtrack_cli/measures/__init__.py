@@ -9,6 +9,11 @@
                    pronation from the IMU, range of motion
     segments.py    movement segments (laps, reaches) of a repeated task
     uncertainty.py measures' spread over draws from the filter's posterior
+    draws.py       the path measures of a block of draws at once
+    angle_draws.py the angles' ranges of motion of a block of draws at once
+    pchip.py       scipy's PCHIP interpolation in numpy, a block of points at a time
+    peaks.py       scipy's find_peaks in numpy, and peak counts of many rows at once
+    vec3.py        dot products and lengths of 3-vectors, numpy's bits, faster
     table.py       the rows of kinematics-METHOD.csv for one trajectory
 
 A measure that cannot be computed raises ``NotComputable(why)``; ``table`` turns it into a

@@ -6,12 +6,13 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.measures.base import DEFAULT, NotComputable, Settings
+from armtrack_cli.measures.vec3 import dot3, norm3
 
 
 def elbow_flexion_deg(shoulder: np.ndarray, elbow: np.ndarray, wrist: np.ndarray) -> np.ndarray:
     """(N,) 0° = full extension: 180° minus the angle between elbow→shoulder and elbow→wrist."""
     a, b = shoulder - elbow, wrist - elbow
-    c = np.sum(a * b, -1) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1))
+    c = dot3(a, b) / (norm3(a) * norm3(b))
     return 180.0 - np.degrees(np.arccos(np.clip(c, -1, 1)))
 
 
@@ -30,15 +31,18 @@ def shoulder_angles_deg(shoulder: np.ndarray, elbow: np.ndarray, side: str,
     rotated X; the third, axial rotation, needs the humerus's own frame and is not given).
     Elevation 0° = arm hanging down; plane 0° = abduction in the frontal plane, 90° = forward
     flexion. Y-X-Y has its gimbal lock at 0° elevation, where the plane is undefined: it is
-    NaN wherever elevation < s.plane_min_elevation_deg."""
+    NaN wherever elevation < s.plane_min_elevation_deg. Positions (..., N, 3) give (..., N):
+    each trajectory (e.g. a posterior draw) unwrapped on its own."""
     u = elbow - shoulder
-    u = thorax_from_world(u / np.linalg.norm(u, axis=-1, keepdims=True), side)
+    u = thorax_from_world(u / norm3(u)[..., None], side)
     elev = np.degrees(np.arccos(np.clip(-u[..., 1], -1, 1)))
     plane = np.degrees(np.arctan2(u[..., 0], u[..., 2]))  # u = (sinθ sinα, −cosθ, sinθ cosα)
     ok = np.isfinite(plane) & (elev >= s.plane_min_elevation_deg)
     plane = np.where(ok, plane, np.nan)
-    if ok.any():  # continuous through ±180° over the frames where the plane is defined
-        plane[ok] = np.degrees(np.unwrap(np.radians(plane[ok])))
+    for i in np.ndindex(ok.shape[:-1]):  # one trajectory, or each of many
+        row, o = plane[i], ok[i]  # continuous through ±180° where the plane is defined
+        if o.any():
+            row[o] = np.degrees(np.unwrap(np.radians(row[o])))
     return elev, plane
 
 
@@ -104,3 +108,24 @@ def rom(x: np.ndarray) -> dict[str, float]:
     p5, p95 = np.percentile(x, [5, 95])
     return {"min": float(x.min()), "max": float(x.max()), "rom": float(np.ptp(x)),
             "rom_p5_p95": float(p95 - p5)}
+
+
+def rom_rows(x: np.ndarray) -> dict[str, np.ndarray]:
+    """rom of each row of x (c, N) at once (the posterior draws of one angle): {min, max,
+    rom, rom_p5_p95} -> (c,), NaN for a row with fewer than 10 finite samples. The rows
+    without a missing sample share one percentile call (the same order statistics and the
+    same interpolation as rom's, row by row); the others are rom's, one at a time."""
+    x = np.asarray(x, float)
+    fin = np.isfinite(x)
+    out = {k: np.full(x.shape[0], np.nan) for k in ("min", "max", "rom", "rom_p5_p95")}
+    full = fin.all(axis=1) & (x.shape[1] >= 10)
+    if full.any():
+        y = x[full]
+        lo, hi = y.min(axis=1), y.max(axis=1)
+        p5, p95 = np.percentile(y, [5, 95], axis=1)
+        out["min"][full], out["max"][full], out["rom"][full] = lo, hi, hi - lo
+        out["rom_p5_p95"][full] = p95 - p5
+    for i in np.flatnonzero(~full & (fin.sum(axis=1) >= 10)).tolist():
+        for k, v in rom(x[i]).items():
+            out[k][i] = v
+    return out

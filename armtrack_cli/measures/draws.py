@@ -13,6 +13,7 @@ import numpy as np
 from armtrack_cli.measures.base import ONE_MOVEMENT, NotComputable, Settings
 from armtrack_cli.measures.peaks import count_peaks_rows
 from armtrack_cli.measures.signal import lowpass, uniform
+from armtrack_cli.measures.vec3 import norm3
 
 Values = dict[str, np.ndarray]  # measure -> (c,) over the draws, NaN = not computable
 
@@ -24,7 +25,7 @@ def speed_profiles(t: np.ndarray, xyz: np.ndarray, s: Settings
     c, n, _ = xyz.shape
     t_u, p = uniform(t, np.moveaxis(xyz, 0, 1).reshape(n, 3 * c), s, "wrist trajectory")
     p = lowpass(p, 1.0 / (t_u[1] - t_u[0]), s.lowpass_hz)
-    v = np.linalg.norm(np.gradient(p, t_u, axis=0).reshape(-1, c, 3), axis=2)
+    v = norm3(np.gradient(p, t_u, axis=0).reshape(-1, c, 3))
     return t_u, np.moveaxis(p.reshape(-1, c, 3), 1, 0), np.ascontiguousarray(v.T)
 
 
@@ -106,13 +107,13 @@ def _window_values(t, o, length, p, v, dist, fs, reach, s, skip) -> Values:
     moving = (length >= 3) & (vk >= s.min_moving_speed)  # path.peak
     n = b - a + 1
     rows = np.arange(R)
-    length_m = _masked_sum(np.linalg.norm(np.diff(p, axis=1), axis=2), a, b)
+    length_m = _masked_sum(norm3(np.diff(p, axis=1)), a, b)
     out = {"wrist_peak_speed": vk, "wrist_mean_speed": _masked_sum(v, a, b + 1) / n,
            "time_to_peak_speed": t[o + k] - t[o + a],
            "movement_time": np.where(b - a < 2, np.nan, t[o + b] - t[o + a]),
            "wrist_path_length": length_m}
     if reach:
-        d = np.linalg.norm(p[rows, b] - p[rows, a], axis=1)
+        d = norm3(p[rows, b] - p[rows, a])
         out["straightness"] = np.where(d < s.min_reach_m, np.nan,
                                        length_m / np.maximum(d, 1e-300))
     # smoothness.py on each draw's span; _check: ≥ 10 finite samples, not constant

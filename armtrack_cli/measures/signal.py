@@ -7,6 +7,7 @@ import numpy as np
 from armtrack_cli.core.butter import lowpass_columns
 from armtrack_cli.measures.base import NotComputable, Settings
 from armtrack_cli.measures.pchip import pchip
+from armtrack_cli.measures.vec3 import norm3
 
 
 def longest_gap_s(t: np.ndarray, ok: np.ndarray) -> float:
@@ -49,5 +50,5 @@ def speed_profile(t: np.ndarray, xyz: np.ndarray, s: Settings,
     t_u, p = uniform(t, xyz, s, what)
     fs = 1.0 / (t_u[1] - t_u[0])
     p = lowpass(p, fs, s.lowpass_hz)
-    v = np.linalg.norm(np.gradient(p, t_u, axis=0), axis=1)
+    v = norm3(np.gradient(p, t_u, axis=0))
     return t_u, p, v

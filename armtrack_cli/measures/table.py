@@ -9,11 +9,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from armtrack_cli.measures import angles, path, smoothness
+from armtrack_cli.measures.angle_draws import angle_draws
 from armtrack_cli.measures.base import DEFAULT, ONE_MOVEMENT, NotComputable, Settings
 from armtrack_cli.measures.draws import PathDraws
 from armtrack_cli.measures.segments import segments
 from armtrack_cli.measures.signal import speed_profile
-from armtrack_cli.measures.uncertainty import draw_blocks, spread
+from armtrack_cli.measures.uncertainty import draw_blocks, spread_rows
 
 REACH_TASKS = ("reach", "reach-grasp")
 ANGLES = {  # name: unit with its convention
@@ -159,7 +160,7 @@ def values(inp: Inputs, s: Settings, windows: list | None = None
 
 def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[str, str], float]:
     """SD of every measure over draws from the posterior (uncertainty.py), a block of draws
-    at a time: the path measures of a block at once (draws.py), the angles draw by draw."""
+    at a time: the path measures of a block at once (draws.py), and its angles (angle_draws.py)."""
     if inp.wrist_sd is None and inp.angles_sd is None:
         return {}
     none = iter(lambda: None, 0)  # no posterior for this input: None for every block
@@ -177,20 +178,11 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
         if inp.wrist is not None:  # the elbow is the wrist moved by a known vector: its error
             wrist = inp.wrist[None] + (0.0 if ew is None else ew)
             by_path = path_draws(np.broadcast_to(wrist, (c, *inp.wrist.shape)))
-        ang = []
-        for i in range(c):
-            d = replace(inp, q_WB=None)  # the IMU's pronation has no posterior
-            if ew is not None:
-                d = replace(d, wrist=inp.wrist + ew[i],
-                            elbow=None if inp.elbow is None else inp.elbow + ew[i])
-            if ea is not None:
-                d = replace(d, wrist_angles=inp.wrist_angles + ea[i])
-            ang.append(angle_values(d, s))
+        by_angle = angle_draws(inp, ew, ea, s)
         for i, k in enumerate(keys):
-            got[i, done:done + c] = by_path[k] if k in by_path else [
-                v if isinstance(v, float) else np.nan for v in (a.get(k, "") for a in ang)]
+            got[i, done:done + c] = by_path.get(k, by_angle.get(k, np.nan))
         done += c
-    return {k: spread(got[i]) for i, k in enumerate(keys)}
+    return dict(zip(keys, spread_rows(got).tolist()))
 
 
 def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None) -> list[dict]:

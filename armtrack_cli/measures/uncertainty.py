@@ -86,3 +86,18 @@ def spread(samples) -> float:
     n = x.size
     x = x[np.isfinite(x)]
     return float(np.std(x, ddof=1)) if x.size >= 2 and 2 * x.size >= n else float("nan")
+
+
+def spread_rows(x: np.ndarray) -> np.ndarray:
+    """spread of each row of x (k, draws): the rows without a NaN through one np.std call
+    (the same sums per row as one at a time), the others one at a time."""
+    x = np.asarray(x, float)
+    out = np.empty(x.shape[0])
+    full = np.isfinite(x).all(axis=1)
+    if x.shape[1] >= 2:
+        out[full] = np.std(x[full], axis=1, ddof=1)
+    else:
+        out[full] = np.nan
+    for i in np.flatnonzero(~full).tolist():
+        out[i] = spread(x[i])
+    return out

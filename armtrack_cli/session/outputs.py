@@ -194,7 +194,9 @@ def column_lines(names: list[str], cols: list, formats: list[str]) -> Iterator[s
     yield ",".join(names) + "\n"
     for lo in range(0, len(cols[0]) if cols else 0, CSV_BLOCK):
         block = [c[lo:lo + CSV_BLOCK].tolist() for c in cols]
-        yield _NAN_CELL.sub("", "".join(row % r for r in zip(*block)))
+        text = "".join(row % r for r in zip(*block))
+        yield _NAN_CELL.sub("", text) if "nan" in text else text  # (the search: ~1 % of the
+        #                                                           substitution's time)
 
 
 CSV_BLOCK = 4096  # rows formatted and written at once
