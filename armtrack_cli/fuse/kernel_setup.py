@@ -39,4 +39,4 @@ def load_kernels(method: str) -> None:
     else:
         pf_kernel.run(np.zeros((10, 6)), np.zeros(2, np.uint64), z, q, d3, d3, d3,
                       d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
-                      1.0, guard_args(FuseSettings(particles=10), np.zeros((2, 2, 3))), d3, 0.0)
+                      1.0, guard_args(FuseSettings(particles=10), d3, np.zeros(3)), d3, 0.0)
