@@ -260,6 +260,7 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
     cam, dist = camera_arrays(proj)
     walk = _per_axis(s.walk_pos_m, s.walk_vel_m_s)
     rays = robust.detection_rays(proj, inp.z) if constrained else np.empty((0, 3))
+    pf_kernel.load_passes()  # before run itself: its passes' own code (once a process)
     mean, cov, n_eff, codes = pf_kernel.run(
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
         _f64(centres) if constrained else np.zeros((inp.z.shape[0], 3)), cam, dist, walk,

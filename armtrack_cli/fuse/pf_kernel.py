@@ -19,6 +19,8 @@ the camera's projection π in fuse/projection_kernel.py.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 
@@ -35,7 +37,8 @@ from armtrack_cli.fuse.pf_guard_kernel import (
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _total
 from armtrack_cli.fuse.projection_kernel import _camera_tuple, _dist_tuple, _pixel
 
-__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals_with", "normals_work", "run"]
+__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals_with", "load_passes", "normals_work",
+           "run"]
 
 # error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
 # whose check keeps LLVM from vectorising any loop that divides
@@ -325,3 +328,32 @@ def _sum_sq(w):
     for i in range(w.size):  # by index: LLVM vectorises this, not numba's array iterator
         s += w[i] * w[i]
     return s
+
+
+@functools.cache
+def load_passes() -> None:
+    """Load the passes ``run`` calls, each from its own compiled library, before ``run`` (once a
+    process; callers: methods.run_particles, kernel_setup). numba links every callee into the
+    caller's library and optimises the whole again; loaded from the cache, run calls those
+    copies, which run slower than the passes' own code (pf-constraint, 500 particles,
+    circle-01: 28,100 against 32,400 frames/s, the same numbers), and it calls the passes' own
+    code where theirs is loaded first, as after a fresh compile, which makes the callees first.
+    Each is called here on a tiny problem with the argument types run gives it."""
+    n = 8
+    state, k, f = np.zeros(2, np.uint64), 1, 1.0
+    xs, xr, eps, px = np.zeros((6, n)), np.zeros((6, n)), np.zeros((12, n)), np.zeros((2, n))
+    w, lw, v3, v6 = np.full(n, 1.0 / n), np.zeros(n), np.zeros(3), np.zeros(6)
+    idx, work, start = np.zeros(n, np.int64), np.zeros((3, n)), np.zeros(2 * n + 2, np.int64)
+    d3, cam = np.zeros((2, 3)), np.r_[np.eye(3).ravel(), 0.0, 0.0, 10.0, 1.0, 1.0, 0.0, 0.0]
+    fill_normals_with(state, eps, normals_work(eps.size))
+    _gather_predict(xs, idx, v3, eps, k, v3, d3, d3, d3, xr)
+    _predict(xs, eps, k, v3, d3, d3, d3)
+    _weigh(xs, v3[:2], f, cam, np.zeros(5), w, True, lw, px)
+    _pixel_mahalanobis2(px, w, v3[:2], f)
+    _normalise(lw, w)
+    _sum_sq(w)
+    _resample(w, state, k, idx, work, start)
+    _gather_walk(xs, idx, eps, v6, xr)
+    _walk(xs, eps, v6)
+    _constrain(xs, v3, f, f, lw)
+    _moments(xs, w, v6, np.zeros((6, 6)), xr)
