@@ -99,15 +99,12 @@ def _residual(w, s, idx, work, start):
     first, pos = start[:n + 1], start[n + 1:2 * n + 1]
     first[:] = 0
     scale = n / k if k > 0 else 0.0  # ≈ N / Σ frac, the buckets' scale (they only guide)
-    m, acc, cur, cnt = 0, 0.0, -1, 0
+    m, acc = 0, 0.0
     for i in range(n):  # serial: the copies, the cumulative sum, its buckets (NaN: 0)
         m = _emit(idx, m, i, np.int64(nw[i]))
         acc += cdf[i]
         cdf[i] = acc
-        b = max(0, min(np.int64(acc * scale), n - 1))
-        cnt = (cnt & -np.int64(b == cur)) + 1  # entries so far in bucket b, which rises with i:
-        cur = b  # a count in a register stored, not first[b + 1] += 1, whose loads wait on the
-        first[b + 1] = cnt  # last store when two entries share a bucket (4.0 → 3.x µs a call)
+        first[max(0, min(np.int64(acc * scale), n - 1)) + 1] += 1
     k = n - m
     if k <= 0:
         return
