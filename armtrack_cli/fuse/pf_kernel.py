@@ -336,9 +336,10 @@ def load_passes() -> None:
     process; callers: methods.run_particles, kernel_setup). numba links every callee into the
     caller's library and optimises the whole again; loaded from the cache, run calls those
     copies, which run slower than the passes' own code (pf-constraint, 500 particles,
-    circle-01: 28,100 against 32,400 frames/s, the same numbers), and it calls the passes' own
+    circle-01: 28,400 against 32,300 frames/s, the same numbers), and it calls the passes' own
     code where theirs is loaded first, as after a fresh compile, which makes the callees first.
-    Each is called here on a tiny problem with the argument types run gives it."""
+    Each is called here on a tiny problem with the argument types run gives it (other types
+    would load another specialisation, and run would call its copies again)."""
     n = 8
     state, k, f = np.zeros(2, np.uint64), 1, 1.0
     xs, xr, eps, px = np.zeros((6, n)), np.zeros((6, n)), np.zeros((12, n)), np.zeros((2, n))
