@@ -10,6 +10,8 @@ import numpy as np
 from numba import njit
 from timing import best_of  # noqa: I001  (benchmarks/ is on sys.path)
 
+from armtrack_cli.filters.splitmix import fill_normals
+from armtrack_cli.fuse import pf_guard_kernel as G
 from armtrack_cli.fuse import pf_kernel as K
 
 
@@ -52,7 +54,7 @@ def _gather_walk(r, xs, idx, eps, walk, xr):
 @njit
 def _gate(r, px, w, z):
     for _ in range(r):
-        K._pixel_mahalanobis2(px, w, z, 16.0)
+        G._pixel_mahalanobis2(px, w, z, 16.0)
 
 
 @njit
@@ -74,7 +76,7 @@ def passes(n: int = 500, reps: int = 2000) -> list[tuple[str, int, float]]:
                                     rng.normal(0.0, 0.05, (n, 3))].T)
     s = np.array([2026, 0], np.uint64)  # a splitmix stream (key, counter)
     eps = np.empty((12, n))
-    K.fill_normals(s, eps)
+    fill_normals(s, eps)
     cam = np.r_[1.0, 0, 0, 0, -1, 0, 0, 0, -1, -0.3, 0.2, 1.6, 600, 610, 320, 240]
     dist = np.array([0.1, -0.05, 0.001, -0.002, 0.01])
     dt, d3, ace = np.full(4, 1 / 30), np.zeros((4, 3)), np.full((4, 3), 1e-3)

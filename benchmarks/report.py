@@ -119,7 +119,11 @@ def pf_section(res: dict) -> list[str]:
           f"with the same draws; Tao & Hu report {paper} s per frame at 500 particles "
           f"(Pentium 4, 2.8 GHz). CPU seconds of this process; load average (1 min) "
           f"{res.get('pf_load', float('nan')):.1f} when these rows began (a busy machine slows "
-          "even CPU time: the other hyper-thread of the core shares its caches and ports).", "",
+          "even CPU time: the other hyper-thread of the core shares its caches and ports). "
+          "kernel s is the whole methods.run_particles call: its set-up (the initial cloud, the "
+          "sphere centres, the detections' rays; about 0.5 ms at 600 frames) included, the "
+          "passes loaded from their own compiled code before the kernel (pf_kernel.load_passes: "
+          "the copies numba links into the kernel run about 15 % slower).", "",
           "| method | particles | frames | kernel s | frames/s | numpy reference s | × reference "
           "| × the paper | goal | |", "|---|---|---|---|---|---|---|---|---|---|"]
     for method, n, k, t_fast, t_ref in res["pf"]:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from armtrack_cli.filters import gaussian
-from armtrack_cli.filters.particles import ess, moments, resample_below, weights
+from armtrack_cli.filters.particles import ess, gaussian_cloud, moments, resample_below, weights
 from armtrack_cli.filters.resampling import SCHEMES
 
 
@@ -140,3 +140,20 @@ def test_equal_weights_are_never_resampled_for_round_off(n):
     w = np.full(n, 1.0 / n)
     w[: n // 2] *= 1.01  # weights a detection made (here ESS/N = 1 − 2.5e-5) are resampled
     assert ess(w / w.sum()) < resample_below(1.0) * n
+
+
+@pytest.mark.parametrize("cov", ["diagonal", "full", "singular"])
+def test_gaussian_cloud_is_numpys_multivariate_normal(cov):
+    """The particle filters' initial cloud: numpy's multivariate_normal, number for number,
+    from generators in the same state, and left in the same state (what is drawn after it,
+    the splitmix stream's key, is the same too)."""
+    rng = np.random.default_rng(3)
+    mean = rng.normal(size=6)
+    A = rng.normal(size=(6, 6))
+    P = {"diagonal": np.diag(rng.uniform(0.01, 0.1, 6) ** 2), "full": A @ A.T * 1e-3,
+         "singular": A[:, :4] @ A[:, :4].T * 1e-3}[cov]
+    for seed in range(5):
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        np.testing.assert_array_equal(gaussian_cloud(a, mean, P, 500),
+                                      b.multivariate_normal(mean, P, size=500))
+        assert a.bit_generator.random_raw() == b.bit_generator.random_raw()

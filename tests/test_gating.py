@@ -161,6 +161,30 @@ def test_ray_sphere_points_are_on_the_ray_and_on_the_sphere():
     assert (d[:, 0] <= d[:, 1]).all()
 
 
+def test_the_kernels_ray_sphere_points_are_the_references():
+    """pf-constraint's kernel makes a re-seeding frame's two points itself, from the frame's
+    ray: the same numbers as robust.ray_sphere_points (which the numpy reference re-seeds
+    on), bit for bit, where the ray meets the sphere and where it misses it; and
+    ray_sphere_points given the centres it would compute is itself unchanged."""
+    from armtrack_cli.fuse.pf_guard_kernel import _ray_sphere_points
+
+    inp, _, _, proj, arm = _camera_problem(n_frames=60)
+    z = inp.z.copy()
+    z[::7] += np.array([90.0, -70.0])  # off the sphere's outline: these rays miss it
+    q = np.random.default_rng(5).normal(size=(z.shape[0], 4))  # the sphere moving too
+    centres = arm.sphere_centres(q)
+    ref = robust.ray_sphere_points(proj, arm, z, q)
+    np.testing.assert_array_equal(robust.ray_sphere_points(proj, arm, z, q, centres), ref)
+    rays, out = robust.detection_rays(proj, z), np.empty((2, 3))
+    seen = np.isfinite(z).all(axis=1)
+    misses = 0
+    for k in np.flatnonzero(seen):
+        _ray_sphere_points(proj.eye, rays[k], centres[k], arm.L1, out)
+        np.testing.assert_array_equal(out, ref[k])
+        misses += bool((out[0] == out[1]).all())
+    assert 5 < misses < seen.sum() - 5  # both cases at work
+
+
 def test_gate_counts_a_run_and_then_reacquires():
     run, codes = 0, []
     for d2 in (1.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0, 50.0):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from armtrack_cli.fuse.pf_kernel import _pixel
+from armtrack_cli.fuse.projection_kernel import _pixel
 
 METHODS = {"inertial": 0, "ekf": 1, "ukf": 2}
 

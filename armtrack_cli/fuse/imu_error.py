@@ -36,7 +36,8 @@ from armtrack_cli.core import quaternion as quat
 from armtrack_cli.fuse import arm_smoother, imu_fold
 from armtrack_cli.fuse.methods import camera_arrays
 from armtrack_cli.fuse.models import Arm, Projection, Steps
-from armtrack_cli.fuse.pf_kernel import _gate_code, _pixel
+from armtrack_cli.fuse.pf_guard_kernel import _gate_code
+from armtrack_cli.fuse.projection_kernel import _pixel
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_kernel import _gate, _scalar_update
 
@@ -78,7 +79,7 @@ def forward(x0, P0, F, b, Q, Hc, zc, use_c, rc, Hk, zk, rk, gate, reacquire, inf
 @njit(cache=True)
 def _camera_rows(x, cam, dist, z, H, zc):
     """The camera pair linearised at x (eq. 7): H (2, d) = ∂π/∂p in p's columns (as
-    arm_smoother.projection_jacobians), zc = z − π(p̄) + H x̄. cam, dist as pf_kernel._pixel's."""
+    arm_smoother.projection_jacobians), zc = z − π(p̄) + H x̄. cam, dist as projection_kernel._pixel's."""
     R = cam[:9].reshape(3, 3)
     X = R @ x[:3] + cam[9:12]
     xn, yn, Z = X[0] / X[2], X[1] / X[2], X[2]

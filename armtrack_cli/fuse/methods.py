@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from armtrack_cli.filters import gaussian
-from armtrack_cli.filters.particles import ess, moments, resample_below, weights
+from armtrack_cli.filters.particles import ess, gaussian_cloud, moments, resample_below, weights
 from armtrack_cli.filters.resampling import scheme
 from armtrack_cli.fuse import arm_smoother, imu_bias, robust
 from armtrack_cli.fuse.models import Arm, Projection, Steps
@@ -114,7 +114,7 @@ def _reacquire_inflation(s: FuseSettings) -> np.ndarray:
 def camera_arrays(proj: Projection) -> tuple[np.ndarray, np.ndarray]:
     """The projection as the kernels take it: (R row-major, T, fx, fy, cx, cy) and the
     distortion (k1, k2, p1, p2, k3)."""
-    cam = np.r_[proj.R.ravel(), np.ravel(proj.T), proj._f, proj._c].astype(float)
+    cam = np.concatenate([proj.R.ravel(), np.ravel(proj.T), proj._f, proj._c]).astype(float)
     return cam, np.array([proj.k1, proj.k2, proj.p1, proj.p2, proj.k3], float)
 
 
@@ -162,21 +162,21 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
 
     rng = np.random.default_rng(s.seed)
     N = s.particles
-    x = rng.multivariate_normal(x0, P0, size=N)
+    x = gaussian_cloud(rng, x0, P0, N)  # rng.multivariate_normal(x0, P0, size=N)
     state = splitmix.stream(rng)  # every later draw: the kernel's and the reference's alike
     n_frames = inp.z.shape[0]
-    points = (robust.ray_sphere_points(proj, arm, inp.z, inp.q_WB) if constrained
-              else np.full((n_frames, 2, 3), np.nan))
+    centres = arm.sphere_centres(inp.q_WB) if constrained else None  # once, for both uses
     v_gain = s.kalman_velocity if v_ref is not None else 0.0
     v_ref = np.zeros((n_frames, 3)) if v_ref is None else v_ref
-    if compiled:
-        return _run_particles_compiled(inp, x, state, proj, s, arm, constrained, points,
+    if compiled:  # the kernel makes the ray-sphere points of the frames that re-seed
+        return _run_particles_compiled(inp, x, state, proj, s, arm, centres,
                                        (_f64(v_ref), float(v_gain)))
+    points = (robust.ray_sphere_points(proj, arm, inp.z, inp.q_WB, centres) if constrained
+              else np.full((n_frames, 2, 3), np.nan))
     rng = splitmix.Stream(state)
     resample = scheme(s.resampling)
     w = np.full(N, 1.0 / N)
-    walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
-    centres = arm.sphere_centres(inp.q_WB) if constrained else None
+    walk = _per_axis(s.walk_pos_m, s.walk_vel_m_s)
     mean, cov, n_eff = np.empty((n_frames, 6)), np.empty((n_frames, 6, 6)), np.empty(n_frames)
     codes, run_gated = np.zeros(n_frames, np.int8), 0
     inv2c2 = 0.5 / s.constraint_sigma_m**2
@@ -251,28 +251,37 @@ def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
 
 def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
-                            constrained: bool, points: np.ndarray, vel: tuple) -> Estimates:
+                            centres: np.ndarray | None, vel: tuple) -> Estimates:
+    """centres: arm.sphere_centres (pf-constraint), or None (the plain PF)."""
     from armtrack_cli.fuse import pf_kernel
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
-    st = inp.steps
+    st, constrained = inp.steps, centres is not None
     cam, dist = camera_arrays(proj)
-    walk = np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)]
-    centres = arm.sphere_centres(inp.q_WB) if constrained else np.zeros((inp.z.shape[0], 3))
+    walk = _per_axis(s.walk_pos_m, s.walk_vel_m_s)
+    rays = robust.detection_rays(proj, inp.z) if constrained else np.empty((0, 3))
+    pf_kernel.load_passes()  # before run itself: its passes' own code (once a process)
     mean, cov, n_eff, codes = pf_kernel.run(
         _f64(x), state, _f64(inp.z), _f64(st.dt), _f64(st.dp), _f64(st.dv), _f64(st.noise_factors()),
-        _f64(centres), cam, dist, walk, 0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
+        _f64(centres) if constrained else np.zeros((inp.z.shape[0], 3)), cam, dist, walk,
+        0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
-        resample_below(s.pf_resample_ess), guard_args(s, points), *vel)
+        resample_below(s.pf_resample_ess), guard_args(s, rays, proj.eye), *vel)
     return Estimates(mean, cov, n_eff, codes)
 
 
-def guard_args(s: FuseSettings, points: np.ndarray) -> tuple:
-    """The kernel's gate and re-seeding arguments (pf_kernel.run)."""
-    return (_f64(points), float(s.pixel_sigma**2), float(s.gate_chi2), int(s.reacquire_frames),
-            int(np.floor(s.reseed_share * s.particles + 0.5)), float(s.reseed_ess),
+def guard_args(s: FuseSettings, rays: np.ndarray, eye: np.ndarray) -> tuple:
+    """The kernel's gate and re-seeding arguments (pf_kernel.run): the detections' unit rays
+    (n, 3) from the camera's centre eye (3,)."""
+    return (_f64(rays), _f64(eye), float(s.pixel_sigma**2), float(s.gate_chi2),
+            int(s.reacquire_frames), int(np.floor(s.reseed_share * s.particles + 0.5)), float(s.reseed_ess),
             float(s.reseed_sigma_m), float(s.reseed_prior_m),
-            np.r_[np.full(3, s.reacquire_sigma_m), np.full(3, s.init_vel_sigma_m_s)])
+            _per_axis(s.reacquire_sigma_m, s.init_vel_sigma_m_s))
+
+
+def _per_axis(pos: float, vel: float) -> np.ndarray:
+    """(6,) pos on p's three axes, vel on v's (np.r_'s tenth of the time: a set-up per call)."""
+    return np.repeat(np.array([pos, vel], float), 3)
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,

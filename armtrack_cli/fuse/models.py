@@ -174,7 +174,7 @@ class Projection:
         """(n, 3) unit directions in W of the rays through pixels uv (n, 2)."""
         n = cv2.undistortPoints(np.asarray(uv, float).reshape(-1, 1, 2), self.K,
                                 self.cam.dist).reshape(-1, 2)
-        d = np.c_[n, np.ones(len(n))] @ self.R  # R_WCᵀ (x, y, 1)
+        d = np.hstack([n, np.ones((len(n), 1))]) @ self.R  # R_WCᵀ (x, y, 1)
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 

@@ -11,21 +11,34 @@ compile happens once per install and is loaded from ``__pycache__`` afterwards.
 Shapes: particles x (N, 6) = (p, v) in W (m, m/s), held inside as its transpose xs (6, N) so
 that every pass over the particles runs along contiguous rows (SIMD); the normals likewise as
 eps (12, N), the reference's draws in its order; z (n_frames, 2) px, NaN = no detection.
-The gate, roughening and re-seeding of fuse/robust.py draw their normals after eps, in the
-reference's order too (tests/test_gating.py holds kernel and reference equal with them active).
-The resampling schemes are in fuse/pf_resample_kernel.py.
+The gate, roughening and re-seeding of fuse/robust.py (fuse/pf_guard_kernel.py) draw their
+normals after eps, in the reference's order too (tests/test_gating.py holds kernel and
+reference equal with them active). The resampling schemes are in fuse/pf_resample_kernel.py,
+the camera's projection π in fuse/projection_kernel.py.
 """
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 from numba import njit
 
 from armtrack_cli.filters.fast_exp import exp_nonpositive
-from armtrack_cli.filters.splitmix import fill_normals, fill_normals_with, normals_work
+from armtrack_cli.filters.splitmix import fill_normals_with, normals_work
+from armtrack_cli.fuse.pf_guard_kernel import (
+    _colour_loglik,
+    _gate_code,
+    _pixel_mahalanobis2,
+    _ray_sphere_points,
+    _reseed,
+    _roughen,
+)
 from armtrack_cli.fuse.pf_resample_kernel import RESAMPLING, SUMS, _resample, _total
+from armtrack_cli.fuse.projection_kernel import _camera_tuple, _dist_tuple, _pixel
 
-__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals", "fill_normals_with", "normals_work", "run"]
+__all__ = ["RESAMPLING", "exp_nonpositive", "fill_normals_with", "load_passes", "normals_work",
+           "run"]
 
 # error_model="numpy" everywhere: x / 0 is inf as in numpy, not Python's ZeroDivisionError,
 # whose check keeps LLVM from vectorising any loop that divides
@@ -122,25 +135,6 @@ def _moments(xs, w, mean, cov, d):
             t += 1
 
 
-@njit(cache=True, error_model="numpy")
-def _pixel(p0, p1, p2, cam, dist):
-    """π(p): OpenCV's pinhole with k1 k2 p1 p2 k3 (models.Projection) at one point in W;
-    cam = (R (3, 3) row-major, T, fx, fy, cx, cy) flattened (16,), dist (5,): arrays, or
-    tuples (held in registers through a loop over particles)."""
-    k1, k2, t1, t2, k3 = dist[0], dist[1], dist[2], dist[3], dist[4]
-    X = cam[0] * p0 + cam[1] * p1 + cam[2] * p2 + cam[9]
-    Y = cam[3] * p0 + cam[4] * p1 + cam[5] * p2 + cam[10]
-    Z = cam[6] * p0 + cam[7] * p1 + cam[8] * p2 + cam[11]
-    nx, ny = X / Z, Y / Z
-    r2 = nx * nx + ny * ny
-    rad = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
-    dx, dy = nx * rad, ny * rad
-    if t1 != 0.0 or t2 != 0.0:  # tangential terms
-        xy2 = 2 * nx * ny
-        dx += t1 * xy2 + t2 * (r2 + 2 * nx * nx)
-        dy += t2 * xy2 + t1 * (r2 + 2 * ny * ny)
-    return dx * cam[12] + cam[14], dy * cam[13] + cam[15]
-
 
 @njit(cache=True, error_model="numpy")
 def _predict(xs, eps, k, dt, dp, dv, ace):
@@ -191,15 +185,6 @@ def _weigh(xs, z, inv2s2, cam, dist, w, uniform, lw, px):
     return True
 
 
-@njit(cache=True, error_model="numpy")
-def _camera_tuple(c):
-    return (c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7], c[8], c[9], c[10], c[11], c[12],
-            c[13], c[14], c[15])
-
-
-@njit(cache=True, error_model="numpy")
-def _dist_tuple(d):
-    return d[0], d[1], d[2], d[3], d[4]
 
 
 @njit(cache=True, error_model="numpy")
@@ -230,84 +215,19 @@ def _constrain(xs, centre, L1, inv2c2, lw):
         lw[i] = -inv2c2 * r * r
 
 
-@njit(cache=True, error_model="numpy", fastmath=SUMS)
-def _pixel_mahalanobis2(px, w, z, r2):
-    """robust.pixel_mahalanobis2: νᵀ S⁻¹ ν with ẑ = Σ wᵢ π(pᵢ), ν = z − ẑ,
-    S = Σ wᵢ (π(pᵢ) − ẑ)(π(pᵢ) − ẑ)ᵀ + r2 I; px (2, N) the particles' pixels."""
-    n = w.size
-    mu, mv = 0.0, 0.0
-    for i in range(n):
-        mu += w[i] * px[0, i]
-        mv += w[i] * px[1, i]
-    suu, suv, svv = r2, 0.0, r2
-    for i in range(n):
-        du, dv = px[0, i] - mu, px[1, i] - mv
-        suu += w[i] * du * du
-        suv += w[i] * du * dv
-        svv += w[i] * dv * dv
-    a, b = z[0] - mu, z[1] - mv
-    return (a * (svv * a - suv * b) + b * (suu * b - suv * a)) / (suu * svv - suv * suv)
 
 
-@njit(cache=True, error_model="numpy")
-def _reseed(xs, w_prior, points, sigma, prior_m, state, seed_eps, m, c, d):
-    """robust.branch_split and robust.reseed: particles 0..n0−1 onto points[0], the rest of
-    the n_seed = seed_eps.shape[1] onto points[1], ± sigma; n0 from the predicted cloud's
-    density at the two. seed_eps (3, n_seed), m (6,), c (6, 6), d (6, N) work."""
-    n_seed = seed_eps.shape[1]
-    _moments(xs, w_prior, m, c, d)
-    C = c[:3, :3] + prior_m**2 * np.eye(3)
-    q = np.empty(2)
-    for b in range(2):
-        v = points[b] - m[:3]
-        q[b] = v @ np.linalg.solve(C, v)
-    p0 = 1.0 / (1.0 + np.exp(min(0.5 * (q[0] - q[1]), 700.0)))
-    n0 = int(np.floor(n_seed * p0 + 0.5))
-    fill_normals(state, seed_eps)  # the reference's (3, n_seed)
-    for j in range(3):
-        for i in range(n_seed):
-            xs[j, i] = points[0 if i < n0 else 1, j] + sigma * seed_eps[j, i]
 
-
-@njit(cache=True, error_model="numpy")
-def _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw):
-    """lw_i = −|π(p_i) − z|² / 2σ² + log w_i (eq. 11), as in _predict_and_weigh."""
-    ct, dt5 = _camera_tuple(cam), _dist_tuple(dist)
-    for i in range(xs.shape[1]):
-        u, v = _pixel(xs[0, i], xs[1, i], xs[2, i], ct, dt5)
-        eu, ev = u - z[0], v - z[1]
-        lw[i] = -inv2s2 * (eu * eu + ev * ev) + np.log(w_prior[i])
-
-
-@njit(cache=True, error_model="numpy")
-def _gate_code(d2, gate, run_gated, reacquire):
-    """robust.gate: (code, run) — 1 used, 2 gated, 3 re-acquired (then a grace, run < 0)."""
-    if run_gated < 0:
-        return 1, run_gated + 1
-    if gate <= 0 or d2 <= gate:
-        return 1, 0
-    if run_gated < reacquire:
-        return 2, run_gated + 1
-    return 3, -reacquire
-
-
-@njit(cache=True, error_model="numpy")
-def _roughen(xs, sd, state, eps):
-    """robust.roughen: x_ij ± sd_j for every particle (the re-acquisition's spread); eps (6, N)
-    work, filled as the reference's (6, N)."""
-    fill_normals(state, eps)
-    for j in range(6):
-        for i in range(xs.shape[1]):
-            xs[j, i] += sd[j] * eps[j, i]
 
 
 @njit(cache=True, error_model="numpy")
 def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_gated, guard,
-                    constrained, w_prior, xr, seed_eps, m6, c6):
+                    constrained, sphere, w_prior, xr, seed_eps, m6, c6, pts):
     """methods.run_particles' step 2 after the gate (fuse/robust.py): the χ² gate on the
     predicted pixels px, then (unless gated) w ∝ w⁻ p(z | x), roughened first if it
-    re-acquires, and pf-constraint's re-seeding. Returns (whether z is used, run_gated, Σ w²)."""
-    points, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
+    re-acquires, and (constrained) pf-constraint's re-seeding on the points where z's ray meets
+    the wrist's sphere = (centre (3,), radius). Returns (whether z is used, run_gated, Σ w²)."""
+    rays, eye, r2, gate, reacquire, n_seed, reseed_ess, reseed_sigma, prior_m, rough = guard
     after_blind = run_gated >= reacquire  # the first detection after a card: re-seed too
     codes[k], run_gated = _gate_code(_pixel_mahalanobis2(px, w, z, r2), gate, run_gated,
                                      reacquire)
@@ -321,7 +241,9 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
     N = w.size
     if constrained and n_seed > 0 and (codes[k] == 3 or after_blind
                                        or 1.0 / ss < reseed_ess * N):
-        _reseed(xs, w_prior, points[k], reseed_sigma, prior_m, state, seed_eps, m6, c6, xr)
+        _moments(xs, w_prior, m6, c6, xr)  # the predicted cloud, before the colour weights
+        _ray_sphere_points(eye, rays[k], sphere[0], sphere[1], pts)
+        _reseed(xs, m6, c6, pts, reseed_sigma, prior_m, state, seed_eps)
         codes[k] = 4 if codes[k] == 1 else codes[k]
         _colour_loglik(xs, z, inv2s2, cam, dist, w_prior, lw)
         ss = _normalise(lw, w)
@@ -333,8 +255,10 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
         constrained, scheme, resample_ess, guard, v_ref, v_gain):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
     (eqs. 12-14). x (N, 6) the initial particles; state (2,) the splitmix stream (advanced);
-    ``guard`` = (points (n_frames, 2, 3), r2, gate, reacquire, n_seed, reseed_ess,
-    reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py; v_ref
+    ``guard`` = (rays (n_frames, 3), eye (3,), r2, gate, reacquire, n_seed, reseed_ess,
+    reseed_sigma, prior_m, rough (6,)): the gate and the re-seeding of fuse/robust.py, the
+    detections' unit rays from the camera's centre eye (models.Projection.rays; read only
+    where pf-constraint re-seeds, so the plain PF's may be (0, 3)); v_ref
     (n_frames, 3), v_gain: pf-constraint's cloud moved by v_gain (v_ref_k − its mean velocity)
     after step 6 (methods.run_particles).
     Returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
@@ -348,7 +272,8 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     nwork = normals_work(eps.size)
     codes = np.zeros(n_frames, np.int8)
     w_prior, px = np.empty(N), np.empty((2, N))
-    seed_eps, m6, c6 = np.empty((3, guard[4])), np.empty(6), np.empty((6, 6))
+    seed_eps, m6, c6 = np.empty((3, guard[5])), np.empty(6), np.empty((6, 6))
+    pts = np.empty((2, 3))  # a re-seeding frame's ray-sphere points
     idx, shift = np.empty(N, np.int64), np.zeros(3)
     work, start = np.empty((3, N)), np.empty(2 * N + 2, np.int64)
     uniform = True  # every w_i is exactly 1/N
@@ -366,7 +291,8 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
         if seen:  # the χ² gate, roughening and re-seeding
             seen, run_gated, ss = _guarded_colour(xs, state, k, z[k], inv2s2, cam, dist, w, lw,
                                                   px, codes, run_gated, guard, constrained,
-                                                  w_prior, xr, seed_eps, m6, c6)
+                                                  (centres[k], L1),
+                                                  w_prior, xr, seed_eps, m6, c6, pts)
         elif run_gated >= 0:  # no detection: as a gated one (robust.blind)
             run_gated += 1
         if seen:
@@ -402,3 +328,33 @@ def _sum_sq(w):
     for i in range(w.size):  # by index: LLVM vectorises this, not numba's array iterator
         s += w[i] * w[i]
     return s
+
+
+@functools.cache
+def load_passes() -> None:
+    """Load the passes ``run`` calls, each from its own compiled library, before ``run`` (once a
+    process; callers: methods.run_particles, kernel_setup). numba links every callee into the
+    caller's library and optimises the whole again; loaded from the cache, run calls those
+    copies, which run slower than the passes' own code (pf-constraint, 500 particles,
+    circle-01: 28,400 against 32,300 frames/s, the same numbers), and it calls the passes' own
+    code where theirs is loaded first, as after a fresh compile, which makes the callees first.
+    Each is called here on a tiny problem with the argument types run gives it (other types
+    would load another specialisation, and run would call its copies again)."""
+    n = 8
+    state, k, f = np.zeros(2, np.uint64), 1, 1.0
+    xs, xr, eps, px = np.zeros((6, n)), np.zeros((6, n)), np.zeros((12, n)), np.zeros((2, n))
+    w, lw, v3, v6 = np.full(n, 1.0 / n), np.zeros(n), np.zeros(3), np.zeros(6)
+    idx, work, start = np.zeros(n, np.int64), np.zeros((3, n)), np.zeros(2 * n + 2, np.int64)
+    d3, cam = np.zeros((2, 3)), np.r_[np.eye(3).ravel(), 0.0, 0.0, 10.0, 1.0, 1.0, 0.0, 0.0]
+    fill_normals_with(state, eps, normals_work(eps.size))
+    _gather_predict(xs, idx, v3, eps, k, v3, d3, d3, d3, xr)
+    _predict(xs, eps, k, v3, d3, d3, d3)
+    _weigh(xs, v3[:2], f, cam, np.zeros(5), w, True, lw, px)
+    _pixel_mahalanobis2(px, w, v3[:2], f)
+    _normalise(lw, w)
+    _sum_sq(w)
+    _resample(w, state, k, idx, work, start)
+    _gather_walk(xs, idx, eps, v6, xr)
+    _walk(xs, eps, v6)
+    _constrain(xs, v3, f, f, lw)
+    _moments(xs, w, v6, np.zeros((6, 6)), xr)

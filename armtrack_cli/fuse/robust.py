@@ -74,17 +74,31 @@ def pixel_mahalanobis2(px: np.ndarray, w: np.ndarray, z: np.ndarray, r2: float) 
     return float(nu @ np.linalg.solve(S, nu))
 
 
-def ray_sphere_points(proj, arm, z: np.ndarray, q_WB: np.ndarray) -> np.ndarray:
+def detection_rays(proj, z: np.ndarray) -> np.ndarray:
+    """(n, 3) the unit rays (models.Projection.rays) of detections z (n, 2) px, NaN where there
+    is none: what ray_sphere_points, and the compiled pf-constraint where it re-seeds, start
+    from."""
+    out = np.full((z.shape[0], 3), np.nan)
+    seen = np.isfinite(z).all(axis=1)
+    if seen.any():
+        out[seen] = proj.rays(z[seen])
+    return out
+
+
+def ray_sphere_points(proj, arm, z: np.ndarray, q_WB: np.ndarray,
+                      centres: np.ndarray | None = None) -> np.ndarray:
     """(n, 2, 3): per frame the two points where the camera ray of detection z (n, 2) px meets
     the wrist sphere |p − (S + L2 R_WB u)| = L1 (eq. 15), nearer the camera first; where the ray
-    misses it, its point nearest to the sphere, twice; NaN where there is no detection."""
+    misses it, its point nearest to the sphere, twice; NaN where there is no detection.
+    ``centres``: arm.sphere_centres(q_WB), where the caller has them already."""
     n = z.shape[0]
     out = np.full((n, 2, 3), np.nan)
     seen = np.isfinite(z).all(axis=1)
     if not seen.any():
         return out
-    d = proj.rays(z[seen])
-    near, far, _ = models.ray_sphere(proj.eye, d, arm.sphere_centres(q_WB[seen]), arm.L1)
+    d = detection_rays(proj, z)[seen]
+    c = arm.sphere_centres(q_WB[seen]) if centres is None else centres[seen]
+    near, far, _ = models.ray_sphere(proj.eye, d, c, arm.L1)
     s = np.maximum(np.stack([near, far], 1), 0.0)  # never behind the camera
     out[seen] = proj.eye + s[:, :, None] * d[:, None, :]
     return out
