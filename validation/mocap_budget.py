@@ -313,8 +313,8 @@ READING = [  # the reading of the tables of section(), after them
     "peaks of 0.1-0.25 m/s² (tremor, sway), so it took 15 of FR2's 57 still frames at seed 1 "
     "(true speed under 2 cm/s) and 24 of AR1's 65; it now takes the window's RMS, as Skog's "
     "statistic averages it, and finds 28 and 51 (the true speed on them at most 1.4 cm/s). "
-    "And the rest rows' SD is the resting hand's velocity measured on the other trials "
-    "(0.42-0.51 cm/s per axis, the line above) instead of 1 cm/s. Seed 1's FR2 went from "
+    "And the rest rows' SD became the resting hand's velocity RMS measured on the other "
+    "trials (0.42-0.51 cm/s per axis; since then × √τ, below) instead of 1 cm/s. Seed 1's FR2 went from "
     "2.75 to 1.31 cm and AR1 from 1.60 to 0.92 cm; FR1, whose error is a constant depth "
     "offset and not the rest, from 2.03 to 2.18 cm.", "",
     "*The camera's pose and the pixel σ* (this page's previous version: 19 of 21 "
