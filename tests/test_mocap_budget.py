@@ -94,17 +94,38 @@ def test_the_prior_is_the_mean_offset_of_the_elbows_sphere(tmp_path):
     assert np.isclose(sd_c, 0.01, atol=1e-9) and np.isclose(sd_r, 0.01, atol=1e-9)
 
 
-def test_rest_speed_is_the_median_of_each_trials_still_velocity(tmp_path):
-    """Three trials whose still samples (speed < 2 cm/s) move at ±a per axis (RMS a) and whose
-    moving samples at 10 cm/s: the answer is the median a, the moving samples ignored."""
-    paths = []
-    for k, a in enumerate((0.002, 0.004, 0.009)):
-        still = a * np.where(np.arange(600)[:, None] % 2 == 0, 1.0, -1.0) * np.ones((600, 3))
-        moving = np.tile([0.1, 0.0, 0.0], (200, 1))
-        path = tmp_path / f"T{k}.truth.npz"
-        np.savez(path, wrist_vel=np.vstack([still, moving]))
-        paths.append(path)
-    assert np.isclose(mocap_rates.rest_speed(paths), 0.004, rtol=1e-12)
+def test_rest_speed_is_the_median_of_each_trials_still_velocity_times_root_tau(tmp_path):
+    """Three trials at 30 frames/s whose 600 still frames (speed < 2 cm/s) move at ±a per
+    axis, each value held for 3 frames (a square wave: of the 599 neighbouring pairs 199
+    change sign, ρ_1 = (400 − 199)/599, and at lag 2 most do, ρ_2 < 0, so τ = 1 + 2 ρ_1), and
+    whose moving frames go at 10 cm/s: the answer is the median a·√τ, the moving frames
+    ignored; held for 1 frame (ρ_1 = −1: τ = 1) it is the median a."""
+    for hold, tau in ((3, 1 + 2 * (400 - 199) / 599), (1, 1.0)):
+        paths = []
+        for k, a in enumerate((0.002, 0.004, 0.009)):
+            sign = np.where((np.arange(600) // hold) % 2 == 0, 1.0, -1.0)
+            still = a * sign[:, None] * np.ones((600, 3))
+            moving = np.tile([0.1, 0.0, 0.0], (200, 1))
+            t = np.arange(800) / 30.0
+            path = tmp_path / f"T{k}-{hold}.truth.npz"
+            np.savez(path, wrist_vel=np.vstack([still, moving]), t=t, frame_t=t)
+            paths.append(path)
+        assert np.isclose(mocap_rates.rest_speed(paths), 0.004 * np.sqrt(tau), rtol=1e-9)
+
+
+def test_correlation_frames_of_a_first_order_autoregression():
+    """A still hand's velocity as AR(1), x_k = φ x_{k−1} + e: ρ_k = φ^k, τ = (1 + φ)/(1 − φ)
+    (= 3 for φ = 0.5); the estimate from 40 runs of 2,000 frames within 5 %."""
+    rng = np.random.default_rng(11)
+    phi, runs = 0.5, []
+    for _ in range(40):
+        e = rng.standard_normal((2000, 3))
+        x = np.empty_like(e)
+        x[0] = e[0] / np.sqrt(1 - phi**2)
+        for k in range(1, 2000):
+            x[k] = phi * x[k - 1] + e[k]
+        runs.append(x)
+    assert abs(mocap_rates.correlation_frames(runs) - 3.0) < 0.15
 
 
 def test_the_board_pose_error_against_a_known_correction(tmp_path):

@@ -79,16 +79,34 @@ def _batch_with_velocity(prob, still, sd):
 
 def test_before_the_video_the_imu_alone_decides():
     """Steps before the first frame (the IMU recorded before the video) have no patch: rest
-    there is the IMU's test alone, over a window twice as long; from the video on, the
-    patch's window is the video's."""
+    there is the IMU's test alone, over a window twice as long, cut at the IMU's first
+    sample (t = 0: the window [max(t - 0.3, 0), t + 0.3] holds at least 0.3 s); from the
+    video on, the patch's window is the video's."""
     t, f, w, tf, z = _stream(np.random.default_rng(1))
     z2 = z.copy()
     z2[:12] = np.nan  # the video starts at frame 12, t = 0.4 s
     found = rest.rest_frames(t, f, w, tf, z2, rest.RestTest(window_s=0.3), video_from=12)
-    imu_only = (tf - 0.3 >= 0) & (tf + 0.3 < 1.02)
+    imu_only = tf + 0.3 < 1.02
     on_video = (tf - 0.15 >= tf[12] - 1e-9) & (tf + 0.15 < 1.02)
     assert found[:12].any() and np.array_equal(found[:12], imu_only[:12])
     assert np.array_equal(found[12:], on_video[12:])
+
+
+def test_a_hand_resting_only_in_the_imus_first_samples_is_found_there():
+    """A trial whose hand rests in the IMU's first 0.4 s and moves (gyro at 0.5 rad/s) from
+    then on, the video starting at 0.5 s: before the video, the frames whose window cut at
+    the IMU's first sample lies in the still span (t + 0.3 < 0.4) are at rest — the whole
+    0.6 s window (the rule before the cut) fits nowhere there; none after."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0, 2.0, 0.01)
+    w = 0.003 * rng.standard_normal((t.size, 3))
+    w[t >= 0.4, 2] += 0.5
+    f = np.array([0.0, 0.0, 9.81]) + 0.02 * rng.standard_normal((t.size, 3))
+    tf = np.arange(0, 2.0, 1 / 30)
+    z = np.c_[320 + 0 * tf, 240 + 0 * tf]
+    z[:15] = np.nan  # the video starts at frame 15, t = 0.5 s
+    found = rest.rest_frames(t, f, w, tf, z, rest.RestTest(window_s=0.3), video_from=15)
+    assert np.array_equal(found, tf + 0.3 < 0.4) and found.sum() == 3
 
 
 def test_the_accelerometer_is_judged_by_its_rms_over_the_window():

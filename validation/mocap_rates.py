@@ -54,17 +54,50 @@ def arm_priors(truths: list[Path]) -> tuple[float, ...]:
             float(np.sqrt(np.mean(np.square(np.array(dr) - mr)))), *map(float, mc), mr)
 
 
+def _still_runs(v: np.ndarray, least: int = 10) -> list[np.ndarray]:
+    """The runs of at least ``least`` consecutive rows of v (n, 3) slower than STILL_M_S."""
+    still = np.linalg.norm(v, axis=1) < STILL_M_S
+    edges = np.diff(np.r_[0, still.astype(int), 0])
+    return [v[a:b] for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))
+            if b - a >= least]
+
+
+def correlation_frames(runs: list[np.ndarray], most: int = 30) -> float:
+    """The integrated autocorrelation time (frames) of a still hand's velocity: 1 + 2 Σ ρ_k
+    over lags k = 1, 2, … until ρ_k first drops below 0 (Geyer 1992's initial positive
+    sequence), ρ_k pooled over the runs and axes (each run about zero, the hand at rest). n
+    frames of it tell its mean as well as n / τ independent ones."""
+    x0 = sum(float(np.sum(r * r)) for r in runs)
+    n0 = sum(r.size for r in runs)
+    tau = 1.0
+    for k in range(1, most):
+        pairs = [(float(np.sum(r[k:] * r[:-k])), r[k:].size) for r in runs if len(r) > k]
+        if not pairs:
+            break
+        rho = (sum(p for p, _ in pairs) / sum(c for _, c in pairs)) / (x0 / n0)
+        if rho < 0:
+            break
+        tau += 2 * rho
+    return tau
+
+
 def rest_speed(truths: list[Path]) -> float:
-    """How fast a resting hand moves, measured on recordings: the median over trials of the
-    wrist velocity's RMS per axis where its speed is below STILL_M_S (m/s). The rest
-    update's SD (validation/from_mocap.py takes it from the trials other than the one scored):
-    the recordings' still hand is not still to the mm (tremor, sway, marker noise)."""
-    rms = []
+    """The rest update's SD (m/s), measured on recordings: the median over trials of a still
+    hand's velocity RMS per axis (at the video's frames, in runs of ≥ 10 frames slower than
+    STILL_M_S) times √τ, τ its correlation_frames. The update's rows are independent, one per
+    resting frame, while the recordings' still hand sways for several frames (tremor, sway,
+    marker noise): rows of the RMS alone would pin the resting hand's mean velocity τ times
+    tighter than those frames know it (validation/from_mocap.py takes it from the trials
+    other than the one scored)."""
+    sd = []
     for path in truths:
         tr = np.load(path)
-        v = tr["wrist_vel"][np.linalg.norm(tr["wrist_vel"], axis=1) < STILL_M_S]
-        rms.append(np.sqrt(np.mean(v**2)) if v.size else np.nan)
-    return float(np.nanmedian(rms))
+        v = np.stack([np.interp(tr["frame_t"], tr["t"], tr["wrist_vel"][:, i]) for i in range(3)], 1)
+        runs = _still_runs(v)
+        if runs:
+            rms = np.sqrt(np.mean(np.concatenate(runs) ** 2))
+            sd.append(rms * np.sqrt(correlation_frames(runs)))
+    return float(np.median(sd)) if sd else float("nan")
 
 
 def pixel_sd(truths: list[Path]) -> float:

@@ -45,12 +45,17 @@ class RestTest:
     px: float = 1.5  # the patch's centre moves less than this (max − min, per axis)
 
 
-def _window_all(t: np.ndarray, ok: np.ndarray, centres: np.ndarray, half: float) -> np.ndarray:
-    """For each centre time, whether ok holds at every t within ±half (and t covers it)."""
+def _window_all(t: np.ndarray, ok: np.ndarray, centres: np.ndarray, half: float,
+                least: float | None = None) -> np.ndarray:
+    """For each centre time, whether ok holds at every t within ±half (and t covers it).
+    ``least``: the window may be cut at t's first sample (the IMU's start, before the video)
+    if at least this much of it remains."""
     bad = np.r_[0, np.cumsum(~ok)]
     lo = np.searchsorted(t, centres - half, side="left")
     hi = np.searchsorted(t, centres + half, side="right")
-    covered = (centres - half >= t[0]) & (centres + half <= t[-1])
+    first = centres - half if least is None else np.maximum(centres - half, t[0])
+    need = 2 * half if least is None else least
+    covered = (first >= t[0]) & (centres + half - first >= need - 1e-9) & (centres + half <= t[-1])
     return covered & (hi > lo) & (bad[hi] - bad[lo] == 0)
 
 
@@ -75,12 +80,15 @@ def rest_frames(t_imu: np.ndarray, f_B: np.ndarray, w_B: np.ndarray, t_frames: n
     turning = np.linalg.norm(w_B, axis=1) >= test.gyro_rad_s
     dev = np.linalg.norm(f_B, axis=1) - G
 
-    def quiet(centres: np.ndarray, h: float) -> np.ndarray:
-        return (_window_all(t_imu, ~turning, centres, h)
+    def quiet(centres: np.ndarray, h: float, least: float | None = None) -> np.ndarray:
+        return (_window_all(t_imu, ~turning, centres, h, least)
                 & _window_rms_below(t_imu, dev, centres, h, test.accel_m_s2))
 
     rest = quiet(t_frames, half)
-    rest[:video_from] = quiet(t_frames[:video_from], 2 * half)
+    # before the video: the IMU alone, over twice the window, cut at the IMU's first sample
+    # as long as a whole window's worth (window_s) is left (a trial whose hand rests only
+    # in the IMU's first half second, then moves before the video starts)
+    rest[:video_from] = quiet(t_frames[:video_from], 2 * half, test.window_s)
     tv, zv = t_frames[video_from:], z[video_from:]
     seen = np.isfinite(zv).all(axis=1)
     on_video = rest[video_from:] & _window_all(tv, seen, tv, half)
