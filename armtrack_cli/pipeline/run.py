@@ -14,10 +14,10 @@ from armtrack_cli.core.errors import ConfigError
 from armtrack_cli.core.methods import BUILT, METHODS, PALM_METHODS
 from armtrack_cli.detect.palm_blobs import PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings
+from armtrack_cli.pipeline.apart import call_apart
 from armtrack_cli.pipeline.calibrate import calibrate
 from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe
 from armtrack_cli.pipeline.compare import compare
-from armtrack_cli.pipeline.detect import detect
 from armtrack_cli.pipeline.fuse import fuse, settings_for
 from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.depth import depth_path
@@ -56,8 +56,10 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
                                 depth_path(session.root, 0) if session.palm else toml),
                   ("camera.yaml",) + (("palm.toml",) if session.palm else ()),
                   lambda: calibrate(session.root, out=work.path, recipe=recipe, sets=sets), True),
-             Step("detect", (toml, video), ("detections.csv",),
-                  lambda: detect(session.root, out=work.path, recipe=recipe, sets=sets), True)]
+             Step("detect", (toml, video), ("detections.csv",),  # in a process of its own:
+                  # its kernels and decoder do not stay for fuse (pipeline/apart.py)
+                  lambda: call_apart("armtrack_cli.pipeline.detect", "detect", session.root,
+                                     out=work.path, recipe=recipe, sets=sets), True)]
     for m in methods:
         reads = (work / "palm.toml",) if m in PALM_METHODS else (
             session.imu.file if session.imu is not None else None,)
