@@ -40,3 +40,14 @@ def test_armtrack_errors_pickle_whole(exc):
     assert type(back) is type(exc) and str(back) == str(exc) and back.args == exc.args
     assert (back.path, back.problem, back.hint) == (exc.path, exc.problem, exc.hint)
     assert getattr(back, "described", None) == getattr(exc, "described", None)
+
+
+def test_the_peak_together_counts_this_process_and_the_child():
+    """together_mb: this process's anonymous memory at the call plus the child's peak, at
+    least (the child's VmHWM when it answered is at most its last)."""
+    from armtrack_cli.pipeline import apart
+
+    held = apart._status_mb("RssAnon")
+    child_peak = call_apart("armtrack_cli.pipeline.apart", "_status_mb", "VmHWM")
+    assert held > 0 and child_peak > 0
+    assert apart.together_mb() >= 0.9 * held + child_peak
