@@ -11,6 +11,7 @@ import pytest
 
 from armtrack_cli.core.errors import ConfigError, DataError, DescribedError
 from armtrack_cli.pipeline.apart import call_apart
+from armtrack_cli.session.proc_status import status_mb
 
 
 def test_the_call_runs_in_another_process_and_its_value_comes_back():
@@ -47,7 +48,12 @@ def test_the_peak_together_counts_this_process_and_the_child():
     least (the child's VmHWM when it answered is at most its last)."""
     from armtrack_cli.pipeline import apart
 
-    held = apart._status_mb("RssAnon")
-    child_peak = call_apart("armtrack_cli.pipeline.apart", "_status_mb", "VmHWM")
+    held = status_mb("RssAnon")
+    child_peak = call_apart("armtrack_cli.session.proc_status", "status_mb", "VmHWM")
     assert held > 0 and child_peak > 0
     assert apart.together_mb() >= 0.9 * held + child_peak
+
+
+def test_what_the_stage_prints_does_not_spoil_the_answer(capfd):
+    assert call_apart("builtins", "print", "said by the stage") is None
+    assert "said by the stage" in capfd.readouterr().err

@@ -16,9 +16,9 @@ import os
 import pickle
 import subprocess
 import sys
-import tempfile
-from pathlib import Path
 from typing import Any
+
+from armtrack_cli.session.proc_status import status_mb
 
 _CHILD = "from armtrack_cli.pipeline.apart import child; child()"
 _TOGETHER = [0.0]  # MB, the highest of together_mb's sums so far in this process
@@ -32,31 +32,19 @@ def together_mb() -> float:
     return _TOGETHER[0]
 
 
-def _status_mb(key: str) -> float:
-    """/proc/self/status's ``key`` (VmHWM, RssAnon), MB; 0 where there is none."""
-    try:
-        with open("/proc/self/status") as f:
-            for line in f:
-                if line.startswith(key + ":"):
-                    return int(line.split()[1]) / 1024
-    except OSError:
-        pass
-    return 0.0
-
-
 def call_apart(module: str, name: str, *args, **kwargs) -> Any:
     """``module.name(*args, **kwargs)`` in a child process: its return value, or its
     exception raised here (its traceback printed by the child)."""
-    with tempfile.TemporaryDirectory(prefix="armtrack-") as tmp:
-        answer = Path(tmp) / "answer.pickle"
-        env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
-        held = _status_mb("RssAnon")
-        done = subprocess.run([sys.executable, "-c", _CHILD], env=env, check=False,
-                              input=pickle.dumps((module, name, args, kwargs, str(answer))))
-        if not answer.exists():
-            raise RuntimeError(f"{module}.{name} ended in its own process with exit code "
-                               f"{done.returncode} and no answer")
-        ok, value, peak = pickle.loads(answer.read_bytes())
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
+    held = status_mb("RssAnon")
+    done = subprocess.run([sys.executable, "-c", _CHILD], env=env, check=False,
+                          stdout=subprocess.PIPE,
+                          input=pickle.dumps((module, name, args, kwargs)))
+    try:
+        ok, value, peak = pickle.loads(done.stdout)
+    except Exception:  # it died before answering (its own traceback on stderr)
+        raise RuntimeError(f"{module}.{name} ended in its own process with exit code "
+                           f"{done.returncode} and no answer") from None
     _TOGETHER[0] = max(_TOGETHER[0], held + peak)
     if ok:
         return value
@@ -64,12 +52,16 @@ def call_apart(module: str, name: str, *args, **kwargs) -> Any:
 
 
 def child() -> None:
-    """The child's side: the call from stdin, its answer (True, value) or (False, exception)
-    and its peak resident memory (VmHWM, MB) into the file the caller named."""
+    """The child's side: the call from stdin; its answer (True, value) or (False, exception)
+    and its peak resident memory (VmHWM, MB) on stdout, which is the answer's alone (what
+    the stage itself prints goes to stderr)."""
     import importlib
     import traceback
 
-    module, name, args, kwargs, answer = pickle.loads(sys.stdin.buffer.read())
+    answer = os.dup(1)
+    os.dup2(2, 1)  # the stage's prints (Python's and C libraries') to stderr
+    sys.stdout = sys.stderr
+    module, name, args, kwargs = pickle.loads(sys.stdin.buffer.read())
     try:
         out = (True, getattr(importlib.import_module(module), name)(*args, **kwargs))
     except BaseException as exc:  # handed back whole, raised there
@@ -84,4 +76,6 @@ def child() -> None:
             out = (False, exc)
         except Exception:  # an exception that does not survive pickling: its text
             out = (False, RuntimeError(f"{type(exc).__name__}: {exc}"))
-    Path(answer).write_bytes(pickle.dumps((*out, _status_mb("VmHWM"))))
+    data = memoryview(pickle.dumps((*out, status_mb("VmHWM"))))
+    while data:
+        data = data[os.write(answer, data):]
