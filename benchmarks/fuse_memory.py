@@ -15,6 +15,7 @@ the data's and differ from one venv to another). The highest sample is the highe
 from __future__ import annotations
 
 import re
+import resource
 import sys
 import threading
 import time
@@ -78,8 +79,13 @@ def main() -> None:
     getattr(pipeline, stage)(args[0], **({"through": "compare"} if stage == "run" else {}))
     done.set()
     end = _status()
+    from armtrack_cli.pipeline.apart import together_mb
+
+    child = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024  # a stage apart
     print(f"{stage} {args[0]}: {time.perf_counter() - t0:.1f} s, VmHWM {end['VmHWM']:.0f} MB; "
-          f"highest RssAnon {max(r[1] for r in log):.0f} MB, RssFile {max(r[2] for r in log):.0f}")
+          f"highest RssAnon {max(r[1] for r in log):.0f} MB, RssFile {max(r[2] for r in log):.0f}"
+          + (f"; a child's peak {child:.0f} MB, with this process's anon {together_mb():.0f} "
+             "(run's detect, pipeline/apart.py)" if child else ""))
     if "-v" in sys.argv:  # every row where the phase changes or anon moved by more than 4 MB
         print("   s   anon  file  where")
         last_key, last_mb = None, 0.0

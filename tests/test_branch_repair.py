@@ -86,6 +86,25 @@ def test_imu_path_steps_the_errors_from_the_start():
     assert np.abs(D - ref).max() < 1e-12
 
 
+@pytest.mark.parametrize("block", [1, 7, 59, 60])
+def test_a_window_path_taken_in_blocks_is_the_whole_path_to_the_bit(block):
+    """window_path builds a window's steps ``block`` frames at a time (a long run's F whole is
+    tens of MB): the same D and τ, bit for bit, as the path over F, b at once (imu_path's
+    numbers checked above), from a window's first frame on."""
+    p, _, F, b = _session(accel_error=0.03)
+    calls = []
+
+    def steps(lo, hi):
+        calls.append(hi - lo)
+        return F[lo:hi], b[lo:hi]
+
+    x0 = np.r_[p[40], np.zeros(3)]
+    D, tau = branch_repair.window_path(steps, 41, 101, x0, block=block)
+    ref_D, ref_tau = branch_repair.imu_path(F[41:101], b[41:101], x0)
+    assert np.array_equal(D, ref_D) and np.array_equal(tau, ref_tau)
+    assert max(calls) == min(block, 60) and sum(calls) == 60
+
+
 @pytest.mark.parametrize("accel_error", [0.0, 0.03])
 @pytest.mark.parametrize("lo, hi", [(100, 160), (0, 60), (200, N), (120, 126)])
 def test_a_run_put_on_the_wrong_root_is_moved_back(accel_error, lo, hi):

@@ -38,15 +38,21 @@ def detected(tmp_path_factory):
 
 
 def test_the_smoother_runs_without_the_imu_samples_first_pass_or_start(detected, monkeypatch):
-    """By the arm smoother's first pass the IMU's samples (folded by then) and the first
-    pass's means (copied into the start trajectory) are freed, and stay so in every later
-    pass. fuse's outputs are written as before."""
-    imu, first, passes = [], [], []
-    made = fuse_stage.ImuSamples
+    """By the arm smoother's first pass the IMU's samples (folded by then), the first pass's
+    means (copied into the start trajectory) and the filter's steps (the first pass was the
+    last to use them) are freed, and stay so in every later pass. fuse's outputs are written
+    as before."""
+    imu, first, steps, passes = [], [], [], []
+    made, stepped = fuse_stage.ImuSamples, fuse_stage.models.composite_steps
 
     def imu_samples(*arrays):  # the IMU's arrays as fuse's inputs hold them
         imu.extend(weakref.ref(_root(a)) for a in arrays if a is not None)
         return made(*arrays)
+
+    def composite_steps(*a, **k):  # the filter's steps as fuse's inputs hold them
+        st = stepped(*a, **k)
+        steps.extend(weakref.ref(_root(x)) for x in (st.dt, st.dp, st.dv))
+        return st
 
     smooth = methods.smooth
 
@@ -60,16 +66,18 @@ def test_the_smoother_runs_without_the_imu_samples_first_pass_or_start(detected,
 
     def watched(x0, P0, model, *a, **k):
         gc.collect()
-        passes.append((sum(r() is not None for r in imu), sum(r() is not None for r in first)))
+        passes.append((sum(r() is not None for r in imu), sum(r() is not None for r in first),
+                       sum(r() is not None for r in steps)))
         return blocked(x0, P0, model, *a, **k)
 
     monkeypatch.setattr(fuse_stage, "ImuSamples", imu_samples)
+    monkeypatch.setattr(fuse_stage.models, "composite_steps", composite_steps)
     monkeypatch.setattr(methods, "smooth", first_pass)
     monkeypatch.setattr(arm_smoother, "smooth_blocked", watched)
     out = pipeline.fuse(detected)
     assert out["method"] == "arm-smoother" and Path(out["trajectory"]).exists()
-    assert len(imu) == 4 and len(first) == 1 and len(passes) >= 2, (imu, first, passes)
-    assert all(p == (0, 0) for p in passes), passes
+    assert len(imu) == 4 and len(first) == 1 and len(steps) == 3 and len(passes) >= 2
+    assert all(p == (0, 0, 0) for p in passes), passes
 
 
 def test_without_release_the_inputs_keep_their_imu(detected):
@@ -84,3 +92,4 @@ def test_without_release_the_inputs_keep_their_imu(detected):
     P0 = np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3)
     methods.run("arm-smoother", p.inputs, x0, P0, p.projection, s, p.arm)
     assert p.inputs.imu is not None and not p.inputs.release_imu
+    assert p.inputs.steps is not None

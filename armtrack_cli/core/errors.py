@@ -26,6 +26,17 @@ class ArmtrackError(Exception):
     def __str__(self) -> str:
         return f"{self.path}: {self.message}"
 
+    def __reduce__(self):  # pickled whole (a stage's error from its own process, pipeline/apart.py)
+        return _rebuilt, (type(self), self.__dict__)
+
+
+def _rebuilt(cls: type, state: dict) -> ArmtrackError:
+    """An ArmtrackError (any subclass, whatever its __init__ takes) from its attributes."""
+    exc = cls.__new__(cls)
+    exc.__dict__.update(state)
+    Exception.__init__(exc, exc.message)
+    return exc
+
 
 class ConfigError(ArmtrackError):
     """session.toml or a recipe is wrong: a key, a type or an impossible value."""

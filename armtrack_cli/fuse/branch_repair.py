@@ -38,6 +38,7 @@ MIN_GAP_M = 0.02  # the roots this far apart at least on every frame of a run: n
 MARGIN = 15  # frames either side of a run in its window (0.5 s at 30 fps)
 RATIO = 0.8  # move a run when the other root's residual is below this times its own
 MIN_FRAMES = 3  # shorter runs are left alone (a frame or two the next iteration decides)
+PATH_BLOCK = 1024  # a window's steps built at a time (window_path)
 GRAZING, UNSEEN = -1, -2  # roots_of's codes: roots nearer than MIN_GAP_M, no detection
 
 # steps(lo, hi) -> (F (hi − lo, d, d), b (hi − lo, d)): the process steps into frames lo … hi − 1
@@ -111,13 +112,24 @@ def imu_path(F: np.ndarray, b: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, n
     """(D (m + 1, 3), τ (m + 1,)): the displacement from the state x (d,) with p = v = 0 over
     the steps F (m, d, d), b (m, d) (its IMU errors as x holds them), and the time since it
     (F's ∂p/∂v block is Δ I)."""
+    return window_path(lambda lo, hi: (F[lo:hi], b[lo:hi]), 0, F.shape[0], x)
+
+
+def window_path(steps: Steps, lo: int, hi: int, x: np.ndarray,
+                block: int = PATH_BLOCK) -> tuple[np.ndarray, np.ndarray]:
+    """imu_path over the steps into frames lo … hi − 1, taken from ``steps`` ``block`` frames
+    at a time: a run can be most of a session, whose F whole would be tens of MB (issue 15).
+    The same additions in the same order as one imu_path over them all."""
     x = np.array(x, float)
     x[:6] = 0.0
-    D = np.zeros((F.shape[0] + 1, 3))
-    for j in range(F.shape[0]):
-        x = F[j] @ x + b[j]
-        D[j + 1] = x[:3]
-    return D, np.r_[0.0, np.cumsum(F[:, 0, 3])]
+    D, tau = np.zeros((hi - lo + 1, 3)), np.zeros(hi - lo + 1)
+    for a in range(lo, hi, block):
+        F, b = steps(a, min(a + block, hi))
+        for j in range(F.shape[0]):
+            x = F[j] @ x + b[j]
+            D[a - lo + j + 1] = x[:3]
+        tau[a - lo:a - lo + F.shape[0] + 1] = np.cumsum(np.r_[tau[a - lo], F[:, 0, 3]])
+    return D, tau
 
 
 def misfit(P: np.ndarray, D: np.ndarray, tau: np.ndarray) -> float:
@@ -148,8 +160,7 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
     windows = [(max(lo - margin, 0), min(hi + margin, n)) for lo, hi, _ in cands]
     paths = []
     for a, e in windows:  # the IMU's path over each window: the same whichever root
-        F, b = steps(a + 1, e)
-        paths.append(imu_path(F, b, X[a]))
+        paths.append(window_path(steps, a + 1, e, X[a]))
 
     def test(i: int) -> float:
         """The other root's misfit over stretch i's window against its own."""

@@ -26,13 +26,14 @@ class Inputs:
     """Per camera frame k: the composite IMU step into k, the detection (NaN = none), the IMU
     orientation at the frame time."""
 
-    steps: Steps
+    steps: Steps  # None once the arm smoother lets it go (drop_steps)
     z: np.ndarray  # (n_frames, 2) px, NaN where the patch was not detected
     q_WB: np.ndarray  # (n_frames, 4)
     t: np.ndarray | None = None  # (n_frames,) s, the frames' times (arm-smoother)
     imu: arm_smoother.ImuSamples | None = None  # the IMU samples themselves (arm-smoother)
     release_imu: bool = False  # the arm smoother takes ``imu`` away once it has them
-    #                            (take_imu): fuse's inputs, run once (issue 15)
+    #                            (take_imu), and ``steps`` once its first pass is done
+    #                            (drop_steps): fuse's inputs, run once (issue 15)
 
     def take_imu(self) -> arm_smoother.ImuSamples | None:
         """``imu``; with release_imu, this Inputs (whoever holds it) holds them no more, so
@@ -41,6 +42,12 @@ class Inputs:
         if self.release_imu:
             object.__setattr__(self, "imu", None)  # frozen but for this hand-over
         return imu
+
+    def drop_steps(self) -> None:
+        """With release_imu, ``steps`` let go (None): the arm smoother folds the IMU's samples
+        itself, and its first pass, the last to step the filter's model, is done."""
+        if self.release_imu:
+            object.__setattr__(self, "steps", None)
 
 
 @dataclass(frozen=True)
@@ -309,6 +316,7 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
             first = [smooth(est, inp, s, "pf-constraint", means_only=True).mean]  # the means
             del est  # its (n, 6, 6) covariances, not held through the smoother (issue 15)
+            inp.drop_steps()  # nor the model's steps (n, 7), where inp is fuse's, run once
             return run_arm_smoother(inp, x0, P0, proj, s, arm, first)
     else:
         raise ValueError(f"unknown method {method!r}")

@@ -1,13 +1,15 @@
-"""What every stage's orchestration shares: where outputs go, the resolved recipe, and the
-memory a finished phase freed handed back."""
+"""What every stage's orchestration shares: where outputs go, the resolved recipe (and fuse's
+settings from it), and the memory a finished phase freed handed back."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
+from armtrack_cli.core.methods import DEFAULT_FOR_KIND
+from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
 from armtrack_cli.session.config import Session
-from armtrack_cli.session.recipe import apply_overrides, known_sections, load_recipe
+from armtrack_cli.session.recipe import apply_overrides, known_sections, load_recipe, section
 
 RECIPE_SECTIONS = ("calibrate", "detect.patch", "detect.palm", "fuse", "fuse.pf", "fuse.models",
                    "ukf_palm")
@@ -24,6 +26,21 @@ def resolve_recipe(recipe: str | None, sets: tuple[str, ...]) -> tuple[dict[str,
         where = "--set" if where == "defaults" else f"{where} with --set"
     known_sections(doc, RECIPE_SECTIONS, where)
     return doc, where
+
+
+def settings_for(recipe: str | None, sets: tuple[str, ...], *, method: str | None = None,
+                 particles: int | None = None, seed: int | None = None,
+                 kind: str | None = None) -> tuple[FuseSettings, str]:
+    """[fuse] from defaults < recipe < --set < explicit flags, checked; and where it came from.
+    With ``kind`` (a session's), the method that neither a flag nor the recipe names is that
+    kind's default (pf-constraint for arm sessions, ukf-palm for palm sessions). Here, not in
+    pipeline/fuse.py: `armtrack run` checks it before it loads fuse's libraries."""
+    doc, where = resolve_recipe(recipe, sets)
+    if method is None and kind is not None and "method" not in doc.get("fuse", {}):
+        method = DEFAULT_FOR_KIND[kind]
+    s = with_flags(section(doc, "fuse", FuseSettings, where), method=method,
+                   particles=particles, seed=seed)
+    return checked(s, where), where
 
 
 def release_memory() -> None:

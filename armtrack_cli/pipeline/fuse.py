@@ -14,35 +14,20 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
-from armtrack_cli.core.methods import DEFAULT_FOR_KIND, NEEDS, PALM_METHODS
+from armtrack_cli.core.methods import NEEDS, PALM_METHODS
 from armtrack_cli.fuse import camera_pose, models, robust
 from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.kernel_setup import load_kernels
 from armtrack_cli.fuse.methods import Inputs, run
-from armtrack_cli.fuse.settings import FuseSettings, checked, with_flags
-from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe
+from armtrack_cli.fuse.settings import FuseSettings
+from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe, settings_for
 from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
 from armtrack_cli.session.arm_file import write_arm_estimate
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.imu import read_imu
-from armtrack_cli.session.recipe import section
 from armtrack_cli.session.video import probe_video
-
-
-def settings_for(recipe: str | None, sets: tuple[str, ...], *, method: str | None = None,
-                 particles: int | None = None, seed: int | None = None,
-                 kind: str | None = None) -> tuple[FuseSettings, str]:
-    """[fuse] from defaults < recipe < --set < explicit flags, checked; and where it came from.
-    With ``kind`` (a session's), the method that neither a flag nor the recipe names is that
-    kind's default (pf-constraint for arm sessions, ukf-palm for palm sessions)."""
-    doc, where = resolve_recipe(recipe, sets)
-    if method is None and kind is not None and "method" not in doc.get("fuse", {}):
-        method = DEFAULT_FOR_KIND[kind]
-    s = with_flags(section(doc, "fuse", FuseSettings, where), method=method,
-                   particles=particles, seed=seed)
-    return checked(s, where), where
 
 
 @dataclass(frozen=True)

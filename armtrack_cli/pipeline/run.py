@@ -14,11 +14,9 @@ from armtrack_cli.core.errors import ConfigError
 from armtrack_cli.core.methods import BUILT, METHODS, PALM_METHODS
 from armtrack_cli.detect.palm_blobs import PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings
+from armtrack_cli.pipeline.apart import call_apart
 from armtrack_cli.pipeline.calibrate import calibrate
-from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe
-from armtrack_cli.pipeline.compare import compare
-from armtrack_cli.pipeline.detect import detect
-from armtrack_cli.pipeline.fuse import fuse, settings_for
+from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe, settings_for
 from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.depth import depth_path
 from armtrack_cli.session.recipe import recipe_file, section
@@ -56,25 +54,38 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
                                 depth_path(session.root, 0) if session.palm else toml),
                   ("camera.yaml",) + (("palm.toml",) if session.palm else ()),
                   lambda: calibrate(session.root, out=work.path, recipe=recipe, sets=sets), True),
-             Step("detect", (toml, video), ("detections.csv",),
-                  lambda: detect(session.root, out=work.path, recipe=recipe, sets=sets), True)]
+             Step("detect", (toml, video), ("detections.csv",),  # in a process of its own:
+                  # its kernels and decoder do not stay for fuse (pipeline/apart.py)
+                  lambda: call_apart("armtrack_cli.pipeline.detect", "detect", session.root,
+                                     out=work.path, recipe=recipe, sets=sets), True)]
     for m in methods:
         reads = (work / "palm.toml",) if m in PALM_METHODS else (
             session.imu.file if session.imu is not None else None,)
         steps.append(Step(f"fuse {m}", (toml, *reads, work / "camera.yaml", work / "detections.csv"),
                           (f"trajectory-{m}.csv", f"kinematics-{m}.csv"),
-                          lambda m=m: fuse(session.root, method=m, seed=seed, recipe=recipe,
-                                           sets=sets, out=work.path), True))
+                          lambda m=m: _stage("fuse")(session.root, method=m, seed=seed,
+                                                     recipe=recipe, sets=sets, out=work.path),
+                          True))
     if session.groundtruth is not None and methods:
         traj = tuple(work / f"{k}-{m}.csv" for m in methods for k in ("trajectory", "kinematics"))
         steps.append(Step("compare", (toml, session.groundtruth.file, *traj),
                           ("errors.csv", "measures.csv"),
-                          lambda: compare(session.root, methods=methods, out=work.path)))
+                          lambda: _stage("compare")(session.root, methods=methods,
+                                                    out=work.path)))
     made = tuple(work / n for st in steps[2:] for n in st.outputs)  # fuse's and compare's
     steps.append(Step("report", (toml, *made), ("report.pdf",),
                       lambda: _report([(session.root, work.path)])))
     return [s if not (s.settings and rec) else Step(s.name, (*s.inputs, rec), s.outputs, s.call,
                                                     s.settings) for s in steps]
+
+
+def _stage(name: str) -> Callable[..., dict[str, Any]]:
+    """fuse or compare, imported when its step runs: numba and scipy are not in this process
+    while detect runs beside it in its own (pipeline/apart.py; about 25 MB of anonymous
+    memory held meanwhile, issue 15)."""
+    import importlib
+
+    return getattr(importlib.import_module(f"armtrack_cli.pipeline.{name}"), name)
 
 
 def _report(pairs) -> dict[str, Any]:

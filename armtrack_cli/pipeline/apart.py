@@ -1,0 +1,81 @@
+"""A stage called in a child process of its own, its result (or its error) handed back: what
+the stage loads (detect's compiled kernels, the video decoder's libraries and buffers) goes
+with the child, instead of staying in the caller's memory for the stages after it (issue 15:
+in `armtrack run`, about 36 MB of detect's stayed through fuse, whose memory peaks).
+
+A plain ``subprocess`` of this interpreter, not ``multiprocessing``: a Dask worker (run_many)
+is a daemonic process, which multiprocessing forbids to have children. The child finds the
+package where the caller found it (its sys.path), writes to the caller's stderr (warnings as
+they come). The two are resident at once: ``together_mb`` is their highest sum (the caller's
+anonymous memory while it waits, the child's peak), what benchmarks/run.py stage() reports
+where it is above the caller's own peak: a stage moved apart does not hide its memory."""
+
+from __future__ import annotations
+
+import os
+import pickle
+import subprocess
+import sys
+from typing import Any
+
+from armtrack_cli.session.proc_status import status_mb
+
+_CHILD = "from armtrack_cli.pipeline.apart import child; child()"
+_TOGETHER = [0.0]  # MB, the highest of together_mb's sums so far in this process
+
+
+def together_mb() -> float:
+    """The highest resident memory (MB) of this process and a child of call_apart's at once
+    so far: this process's RssAnon when the child started (it holds it while it waits; its
+    file-backed pages are the same libraries' the child maps, counted there) plus the
+    child's VmHWM; 0 before any call (or without /proc)."""
+    return _TOGETHER[0]
+
+
+def call_apart(module: str, name: str, *args, **kwargs) -> Any:
+    """``module.name(*args, **kwargs)`` in a child process: its return value, or its
+    exception raised here (its traceback printed by the child)."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
+    held = status_mb("RssAnon")
+    done = subprocess.run([sys.executable, "-c", _CHILD], env=env, check=False,
+                          stdout=subprocess.PIPE,
+                          input=pickle.dumps((module, name, args, kwargs)))
+    try:
+        ok, value, peak = pickle.loads(done.stdout)
+    except Exception:  # it died before answering (its own traceback on stderr)
+        raise RuntimeError(f"{module}.{name} ended in its own process with exit code "
+                           f"{done.returncode} and no answer") from None
+    _TOGETHER[0] = max(_TOGETHER[0], held + peak)
+    if ok:
+        return value
+    raise value
+
+
+def child() -> None:
+    """The child's side: the call from stdin; its answer (True, value) or (False, exception)
+    and its peak resident memory (VmHWM, MB) on stdout, which is the answer's alone (what
+    the stage itself prints goes to stderr)."""
+    import importlib
+    import traceback
+
+    answer = os.dup(1)
+    os.dup2(2, 1)  # the stage's prints (Python's and C libraries') to stderr
+    sys.stdout = sys.stderr
+    module, name, args, kwargs = pickle.loads(sys.stdin.buffer.read())
+    try:
+        out = (True, getattr(importlib.import_module(module), name)(*args, **kwargs))
+    except BaseException as exc:  # handed back whole, raised there
+        if not isinstance(exc, Exception):
+            raise
+        from armtrack_cli.core.errors import ArmtrackError
+
+        if not isinstance(exc, ArmtrackError):  # an internal error: where, for the report
+            traceback.print_exc()
+        try:
+            pickle.loads(pickle.dumps(exc))
+            out = (False, exc)
+        except Exception:  # an exception that does not survive pickling: its text
+            out = (False, RuntimeError(f"{type(exc).__name__}: {exc}"))
+    data = memoryview(pickle.dumps((*out, status_mb("VmHWM"))))
+    while data:
+        data = data[os.write(answer, data):]

@@ -1,0 +1,59 @@
+"""pipeline/apart.py: a stage called in a child process hands back its result or its error as
+if it had run here (issue 15: `armtrack run` detects in a child, so that detect's kernels and
+decoder do not stay in memory through fuse)."""
+
+from __future__ import annotations
+
+import os
+import pickle
+
+import pytest
+
+from armtrack_cli.core.errors import ConfigError, DataError, DescribedError
+from armtrack_cli.pipeline.apart import call_apart
+from armtrack_cli.session.proc_status import status_mb
+
+
+def test_the_call_runs_in_another_process_and_its_value_comes_back():
+    assert call_apart("os", "getpid") != os.getpid()
+    assert call_apart("os.path", "join", "a", "b") == os.path.join("a", "b")
+    assert call_apart("builtins", "sorted", [3, 1, 2], reverse=True) == [3, 2, 1]
+
+
+def test_an_armtrack_error_comes_back_whole(tmp_path):
+    """A stage's error (what the CLI prints): the same class, file, problem and hint."""
+    with pytest.raises(ConfigError) as got:  # load_session of a folder without session.toml
+        call_apart("armtrack_cli.session.config", "load_session", tmp_path)
+    assert str(tmp_path) in got.value.path and got.value.problem
+
+
+def test_an_internal_error_comes_back_as_itself():
+    with pytest.raises(ValueError, match="invalid literal"):
+        call_apart("builtins", "int", "x")
+
+
+@pytest.mark.parametrize("exc", [
+    ConfigError("session.toml", "[arm] is missing", "add it"),
+    DataError("imu.txt", "no samples"),
+    DescribedError([ConfigError("a.toml", "bad", "fix"), DataError("b", "worse")], {"k": 1})])
+def test_armtrack_errors_pickle_whole(exc):
+    back = pickle.loads(pickle.dumps(exc))
+    assert type(back) is type(exc) and str(back) == str(exc) and back.args == exc.args
+    assert (back.path, back.problem, back.hint) == (exc.path, exc.problem, exc.hint)
+    assert getattr(back, "described", None) == getattr(exc, "described", None)
+
+
+def test_the_peak_together_counts_this_process_and_the_child():
+    """together_mb: this process's anonymous memory at the call plus the child's peak, at
+    least (the child's VmHWM when it answered is at most its last)."""
+    from armtrack_cli.pipeline import apart
+
+    held = status_mb("RssAnon")
+    child_peak = call_apart("armtrack_cli.session.proc_status", "status_mb", "VmHWM")
+    assert held > 0 and child_peak > 0
+    assert apart.together_mb() >= 0.9 * held + child_peak
+
+
+def test_what_the_stage_prints_does_not_spoil_the_answer(capfd):
+    assert call_apart("builtins", "print", "said by the stage") is None
+    assert "said by the stage" in capfd.readouterr().err
