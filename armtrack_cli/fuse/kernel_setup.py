@@ -18,14 +18,8 @@ def load_kernels(method: str) -> None:
     if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint", "arm-smoother"):
         return
     if method == "arm-smoother":
-        from armtrack_cli.fuse.smoother_kernel import smooth as smoother_pass
-
-        d, n = 12, 2
-        e = np.tile(np.eye(d), (n, 1, 1))
-        smoother_pass(np.zeros(d), np.eye(d), e, np.zeros((n, d)), e, np.zeros((n, 2, d)),
-                      np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
-                      np.ones(n, bool), 1.0, 13.8)
-        method = "pf-constraint"
+        _load_smoother_passes()
+        method = "pf-constraint"  # its first pass
     from armtrack_cli.fuse import gaussian_kernel, pf_kernel
 
     z, d3, q = np.zeros((2, 2)), np.zeros((2, 3)), np.zeros(2)
@@ -41,3 +35,23 @@ def load_kernels(method: str) -> None:
         pf_kernel.run(np.zeros((10, 6)), np.zeros(2, np.uint64), z, q, d3, d3, d3,
                       d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
                       1.0, guard_args(FuseSettings(particles=10), d3, np.zeros(3)), d3, 0.0)
+
+
+def _load_smoother_passes() -> None:
+    """Load the passes the arm smoother runs (fuse/smoother_blocks.py: filter_block and
+    rts_block; not smooth, which only arm_refine's "auto" arm runs, before this) on a
+    two-frame problem with the argument types smooth_blocked gives them: other types would
+    load another specialisation, and the timed run would load theirs again (about 30 ms).
+    Their callees are not loaded first as pf_kernel.load_passes does for the particle filter's:
+    on a 1,024-frame block of long-10 that made filter_block 2 % faster and rts_block 2 %
+    slower (3.45 -> 3.38 and 7.52 -> 7.66 ms, medians of 20 fresh processes each, alternated,
+    load 1), and the two passes' CPU time in a long-10 fuse the same."""
+    from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
+
+    d, n = 12, 2
+    e = np.tile(np.eye(d), (n, 1, 1))
+    xf, Pf = np.zeros((n, d)), e.copy()
+    filter_block(np.zeros(d), np.eye(d), e, np.zeros((n, d)), e, np.zeros((n, 2, d)),
+                 np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
+                 np.ones(n, bool), 1.0, 13.8, True, n, xf, Pf, np.zeros(n, bool))
+    rts_block(xf, Pf, n, e, np.zeros((n, d)), e, np.zeros(d), np.eye(d), True)
