@@ -24,6 +24,7 @@ def test_the_corpus_is_large_and_complete():
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # numpy's, printed before the error line
 def test_bad_input_gives_one_clear_line(tmp_path, name):
     case = CASES[name]
     folder = tmp_path / name

@@ -125,6 +125,8 @@ def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float 
                                "rows are out of order or the file mixes recordings")
         t = _unwrap(stf[:, 0], STF_WRAP) * stf_tick_s
         per_step = np.diff(t) / (steps if steps is not None else 1)
+        if per_step.size == 0:  # one sample has no clock rate; read_imu refuses it as too short
+            return t, float(header_rate or rate_hz or np.nan), dropped, notes
         rate = float(1.0 / np.median(per_step))  # the clock itself, not a header line
         if header_rate is not None and abs(header_rate / rate - 1.0) > 0.05:
             raise ImuFileError(path, f"states Update Rate {header_rate:g} Hz but its "
