@@ -9,7 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from armtrack_cli.measures import angles, path, smoothness
-from armtrack_cli.measures.angle_draws import angle_draws
+from armtrack_cli.measures.angle_draws import WRIST, angle_draws, angle_series_rows
 from armtrack_cli.measures.base import DEFAULT, ONE_MOVEMENT, NotComputable, Settings
 from armtrack_cli.measures.draws import PathDraws
 from armtrack_cli.measures.segments import segments
@@ -121,22 +121,18 @@ def path_values(inp: Inputs, s: Settings, windows: list | None = None
 
 
 def angle_series(inp: Inputs, s: Settings) -> dict[str, np.ndarray | str]:
-    """Each angle over time (deg), or why it cannot be had from these inputs."""
-    out: dict[str, np.ndarray | str] = {}
-    if inp.elbow is not None and inp.shoulder is not None:
-        sh = np.broadcast_to(inp.shoulder, inp.elbow.shape)
-        out["elbow_flexion"] = angles.elbow_flexion_deg(sh, inp.elbow, inp.wrist)
-        out["shoulder_elevation"], out["shoulder_plane"] = angles.shoulder_angles_deg(
-            sh, inp.elbow, inp.side, s)
+    """Each angle over time (deg), or why it cannot be had from these inputs: the posterior
+    draws' angles (angle_draws.angle_series_rows) of this one trajectory, with the IMU's
+    forearm pronation before the wrist's."""
+    rows = angle_series_rows(inp.wrist, inp.elbow, inp.shoulder, inp.wrist_angles, inp.side, s)
+    out: dict[str, np.ndarray | str] = {k: v for k, v in rows.items() if k not in WRIST}
     if inp.q_WB is not None and inp.forearm_axis is not None:
         try:
             out["forearm_pronation"] = angles.forearm_pronation_deg(inp.t, inp.q_WB,
                                                                     inp.forearm_axis, inp.side, s)
         except NotComputable as exc:
             out["forearm_pronation"] = str(exc)
-    if inp.wrist_angles is not None:
-        for k, name in enumerate(("wrist_flexion", "wrist_deviation", "wrist_pronation")):
-            out[name] = inp.wrist_angles[:, k]
+    out.update((k, v) for k, v in rows.items() if k in WRIST)
     return out
 
 

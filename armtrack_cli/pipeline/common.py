@@ -33,7 +33,7 @@ def settings_for(recipe: str | None, sets: tuple[str, ...], *, method: str | Non
                  kind: str | None = None) -> tuple[FuseSettings, str]:
     """[fuse] from defaults < recipe < --set < explicit flags, checked; and where it came from.
     With ``kind`` (a session's), the method that neither a flag nor the recipe names is that
-    kind's default (pf-constraint for arm sessions, ukf-palm for palm sessions). Here, not in
+    kind's default (core.methods.DEFAULT_FOR_KIND). Here, not in
     pipeline/fuse.py: `armtrack run` checks it before it loads fuse's libraries."""
     doc, where = resolve_recipe(recipe, sets)
     if method is None and kind is not None and "method" not in doc.get("fuse", {}):
