@@ -15,7 +15,8 @@ m/s, rad, m/s², rad/s, m (b_g in B); d = 12 (16) without a gyroscope, or orient
     time constant orientation_tau_s); b_a, b_g slow random walks; ℓ and S random walks from
     the declared arm (``drift_noise``, ``drift_prior``);
   - camera (eq. 7): the patch pixel π(p) (π(p; c) with the pose's correction), σ =
-    pixel_sigma, gated by χ² (gate_chi2);
+    pixel_sigma (× √pixel_still_tau where the patch is still: fuse/camera_rows.py), gated by
+    χ² (gate_chi2);
   - arm (eq. 15): |p − L2 u − S| − (L1 + ℓ) = 0 ± constraint_sigma_m, with the forearm
     u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
 Each iteration linearises camera and arm about the current smoothed trajectory and runs one
@@ -32,7 +33,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse import branch_repair, camera_pose, imu_fold, rest, robust
+from armtrack_cli.fuse import branch_repair, camera_pose, camera_rows, imu_fold, rest, robust
 from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
@@ -301,16 +302,17 @@ def run(imu: ImuSamples | list, t_frames: np.ndarray, z: np.ndarray, q_hat: np.n
         start[0][:, drift_slice(m0.size)] = m0[drift_slice(m0.size)]
     use_c = np.isfinite(z).all(axis=1)
     use_k = np.ones(t_frames.size, bool)
+    scale = camera_rows.row_scale(z, s.pixel_still_tau, s.pixel_still_px)
     X, var, elbow_var, gated, iterations, runs = _iterate(
         fd, track, period, (m0, Pm0), start, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
-        still, camera)
+        still, camera, scale)
     X, q_hat = X[m_pre:], q_hat[m_pre:]  # the video's frames
     return Smoothed(X, var[m_pre:], corrected(q_hat, X[:, TH]), elbow_var[m_pre:],
                     gated[m_pre:], iterations, gyro, runs)
 
 
 def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
-             still, camera=False) -> tuple:
+             still, camera=False, scale=None) -> tuple:
     """run()'s Gauss–Newton iterations, each a checkpointed pass (fuse/smoother_blocks.py:
     equal to the plain pass, memory flat in the session's length): the model built a block of
     frames at a time, with the zero-velocity rows of its resting frames (``still``,
@@ -319,7 +321,8 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
     on the wrong ray–sphere root are moved to the other (``repaired``). Returns X, the (p, v)
     and elbow variances, the gated detections, the iterations run and the runs moved.
     ``start``: [the first trajectory], emptied: each pass writes its smoothed states over it
-    as it goes, so one (n, d) trajectory is held, not two."""
+    as it goes, so one (n, d) trajectory is held, not two. ``scale`` (n,): each frame's
+    camera rows scaled by it (camera_rows.row_scale; None: as they are)."""
     X = _given(start)  # each pass's smoothed states written over it, block by block
     n = X.shape[0]
     sh_fixed = None if shoulder is not None else arm.shoulder
@@ -338,6 +341,7 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
                 return ins.arrays if not still[lo:hi].any() else (*ins.arrays, ins.real)
             Hc, zc, Hk, zk = linearise(_before(X, was, lo, hi), z[lo:hi], q_hat[lo:hi], proj,
                                        arm, sh_fixed, camera)
+            Hc, zc = camera_rows.scaled(Hc, zc, None if scale is None else scale[lo:hi])
             arrays = (F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi])
             if not still[lo:hi].any():
                 return arrays

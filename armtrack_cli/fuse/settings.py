@@ -23,6 +23,10 @@ class FuseSettings:
     particles: int = 500  # Tao & Hu IV-A
     resampling: str = "residual"  # Tao & Hu III-E ("standard residual resampling")
     pixel_sigma: float = 4.0  # px, Tao & Hu III-B
+    pixel_still_tau: float = 1.0  # arm-smoother: the camera rows' variance × this where the patch
+    #                               is still (detect's error correlated over τ frames there:
+    #                               fuse/camera_rows.py); 1: every row independent, σ² each
+    pixel_still_px: float = 0.5  # … still: the detections move less than this, px per frame
     accel_noise: float = 1.0  # m/s² per IMU sample: IMU noise, bias and the gravity leak of
     #                           a ~1° orientation error (0.17 m/s²), with margin for latency
     constraint_sigma_m: float = 0.01  # upper-arm length, Tao & Hu eq. 15 (see fuse/methods.py)
@@ -120,12 +124,13 @@ def checked(s: FuseSettings, where: str) -> FuseSettings:
     if not (s.gate_chi2 >= 0 and s.reacquire_frames >= 1 and 0 <= s.reseed_share <= 1
             and s.reseed_ess >= 0 and s.reseed_sigma_m >= 0 and s.reseed_prior_m >= 0
             and s.imu_bias_window_s >= 0 and 0 <= s.kalman_velocity <= 1
-            and s.kalman_passes >= 1):
+            and s.kalman_passes >= 1 and s.pixel_still_tau >= 1 and s.pixel_still_px >= 0):
         raise ConfigError(where, "[fuse] gate_chi2, reacquire_frames, reseed_*, imu_bias_window_s, "
-                          "kalman_velocity, kalman_passes are out of range",
+                          "kalman_velocity, kalman_passes, pixel_still_* are out of range",
                           "gate_chi2 ≥ 0 (0: off), reacquire_frames ≥ 1, 0 ≤ reseed_share ≤ 1, "
                           "reseed_ess, reseed_sigma_m, reseed_prior_m, imu_bias_window_s ≥ 0, "
-                          "0 ≤ kalman_velocity ≤ 1, kalman_passes ≥ 1")
+                          "0 ≤ kalman_velocity ≤ 1, kalman_passes ≥ 1, pixel_still_tau ≥ 1, "
+                          "pixel_still_px ≥ 0")
     for key, value, valid in (("shoulder", s.shoulder, SHOULDERS), ("imu_hold", s.imu_hold, HOLDS),
                               ("imu_error", s.imu_error, IMU_ERRORS),
                               ("kalman_linearise", s.kalman_linearise, LINEARISATIONS),
