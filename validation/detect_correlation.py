@@ -4,8 +4,10 @@ prints one row per kind: each FOLDER a session that `detect` has run on (SESSION
 detections.csv) with the simulator's truth beside it (SESSION.truth.npz).
 
 The error is detect's (u, v) less the true wrist pixel on the frames it reported (ok = 1), less
-the session's mean error (detect's steady offset, the centroid against the wrist joint: that is
-not a correlation from frame to frame). Still frames are those fuse/camera_rows.still_patch
+the session's mean error (detect's steady offset, the centroid against the wrist joint, is no
+correlation from frame to frame; a mean per run would take the held part away with it; a mean
+over all the sessions pooled gives still frames τ = 26-32, each session's still frames then
+holding their own offset, which the lags up to LAGS do not end). Still frames are those fuse/camera_rows.still_patch
 takes as still — read from the detections, as fuse reads them — the rest moving. The lag-k
 autocorrelation ρ_k is pooled over the runs of consecutive frames of one class (pairs within a
 run) and both axes; the integrated autocorrelation time τ = 1 + 2 Σ ρ_k over k = 1, 2, … until ρ_k
@@ -30,17 +32,15 @@ STILL_PX = FuseSettings().pixel_still_px
 LAGS = 30  # ρ_k up to this lag at most
 
 
-def errors(folder: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(e (n, 2) px about the session's mean error, NaN where not reported; still (n,) bool
-    from the detections; the raw error (n, 2)) of one session."""
+def errors(folder: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(e (n, 2) px, NaN where not reported; still (n,) bool from the detections) of one
+    session."""
     tr = np.load(folder.parent / f"{folder.name}.truth.npz")
     det = np.genfromtxt(folder / "armtrack" / "detections.csv", delimiter=",", names=True)
     n = tr["frame_t"].size
     z = np.c_[det["u"][:n], det["v"][:n]]
     z[det["ok"][:n] != 1] = np.nan
-    raw = z - tr["frame_wrist_px"][:n]
-    ok = np.isfinite(raw).all(axis=1)
-    return raw - raw[ok].mean(axis=0), still_patch(z, STILL_PX), raw
+    return z - tr["frame_wrist_px"][:n], still_patch(z, STILL_PX)
 
 
 def runs(mask: np.ndarray, least: int = 4) -> list[tuple[int, int]]:
@@ -73,19 +73,20 @@ def by_class(folders: list[Path]) -> dict[str, dict]:
     axis), ρ_1, ρ_3 and τ."""
     out = {}
     for cls in ("still", "moving"):
-        segs, raw = [], []
+        segs, centred = [], []
         for f in folders:
-            e, still, r = errors(f)
-            mask = np.isfinite(e).all(axis=1) & (still if cls == "still" else ~still)
-            for a, b in runs(mask):
+            e, still = errors(f)
+            ok = np.isfinite(e).all(axis=1)
+            mean = e[ok].mean(axis=0)
+            for a, b in runs(ok & (still if cls == "still" else ~still)):
                 segs.append(e[a:b])
-                raw.append(r[a:b])
+                centred.append(e[a:b] - mean)
         if not segs:
             out[cls] = None
             continue
-        rho = autocorrelation(segs)
-        out[cls] = {"frames": sum(len(s) for s in segs),
-                    "rms": float(np.sqrt(np.mean(np.concatenate(raw) ** 2))),
+        every = np.concatenate(segs)
+        rho = autocorrelation(centred)
+        out[cls] = {"frames": every.shape[0], "rms": float(np.sqrt(np.mean(every**2))),
                     "rho1": float(rho[0]) if rho.size else np.nan,
                     "rho3": float(rho[2]) if rho.size > 2 else np.nan, "tau": integrated_time(rho)}
     return out

@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+from detect_correlation import still_tau
 from mocap_budget import STILL_M_S, sphere_fit
 
 
@@ -117,6 +118,14 @@ def pixel_sd(truths: list[Path]) -> float:
     return float(np.sqrt(np.mean(np.concatenate(err) ** 2)))
 
 
+def pixel_tau(truths: list[Path]) -> float:
+    """How many frames detect's error stays correlated where the patch is still, measured on
+    the other sessions (detect_correlation.still_tau: the integrated autocorrelation time of
+    their errors against the truth on the frames their detections call still): the camera
+    rows' variance there is pixel_sigma² × this (fuse.pixel_still_tau, fuse/camera_rows.py)."""
+    return still_tau([path.parent / path.name.removesuffix(".truth.npz") for path in truths])
+
+
 def rest_sets(rates: tuple[float, ...]) -> tuple[str, ...]:
     """The rest update (fuse/rest.py): v = 0 where the hand rests, ± the resting hand's
     velocity per axis measured on the other trials (rates[8], rest_speed)."""
@@ -132,13 +141,14 @@ def trial_rates(others: list[Path]) -> tuple[float, ...]:
     walk rates and prior (drift_sets), then the resting hand's velocity SD (rest_sets) and
     detect's pixel error (scored_sets; their detections must exist, detect_all)."""
     return (walk_rates(others) + arm_priors(others)
-            + (rest_speed(others), pixel_sd(others)))
+            + (rest_speed(others), pixel_sd(others), pixel_tau(others)))
 
 
 def pixel_sets(rates: tuple[float, ...]) -> tuple[str, ...]:
     """The camera's pose corrected from the board's covariance, and the camera rows' SD
-    detect's pixel error as measured on the other trials (pixel_sd)."""
-    return CAMERA + (f"fuse.pixel_sigma={rates[9]:.4f}",)
+    detect's pixel error as measured on the other trials (pixel_sd), × √τ where the patch is
+    still (pixel_tau)."""
+    return CAMERA + (f"fuse.pixel_sigma={rates[9]:.4f}", f"fuse.pixel_still_tau={rates[10]:.3f}")
 
 
 def scored_sets(rates: tuple[float, ...]) -> tuple[str, ...]:

@@ -15,8 +15,7 @@ m/s, rad, m/s², rad/s, m (b_g in B); d = 12 (16) without a gyroscope, or orient
     time constant orientation_tau_s); b_a, b_g slow random walks; ℓ and S random walks from
     the declared arm (``drift_noise``, ``drift_prior``);
   - camera (eq. 7): the patch pixel π(p) (π(p; c) with the pose's correction), σ =
-    pixel_sigma (× √pixel_still_tau where the patch is still: fuse/camera_rows.py), gated by
-    χ² (gate_chi2);
+    pixel_sigma (× √pixel_still_tau on still frames: camera_rows.py), gated by χ² (gate_chi2);
   - arm (eq. 15): |p − L2 u − S| − (L1 + ℓ) = 0 ± constraint_sigma_m, with the forearm
     u = exp(−[δθ]×) R̂ u_B from the corrected orientation (eq. 2).
 Each iteration linearises camera and arm about the current smoothed trajectory and runs one
@@ -321,8 +320,7 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
     on the wrong ray–sphere root are moved to the other (``repaired``). Returns X, the (p, v)
     and elbow variances, the gated detections, the iterations run and the runs moved.
     ``start``: [the first trajectory], emptied: each pass writes its smoothed states over it
-    as it goes, so one (n, d) trajectory is held, not two. ``scale`` (n,): each frame's
-    camera rows scaled by it (camera_rows.row_scale; None: as they are)."""
+    as it goes, so one (n, d) trajectory is held, not two. ``scale``: camera_rows.row_scale."""
     X = _given(start)  # each pass's smoothed states written over it, block by block
     n = X.shape[0]
     sh_fixed = None if shoulder is not None else arm.shoulder
@@ -341,7 +339,7 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
                 return ins.arrays if not still[lo:hi].any() else (*ins.arrays, ins.real)
             Hc, zc, Hk, zk = linearise(_before(X, was, lo, hi), z[lo:hi], q_hat[lo:hi], proj,
                                        arm, sh_fixed, camera)
-            Hc, zc = camera_rows.scaled(Hc, zc, None if scale is None else scale[lo:hi])
+            Hc, zc = camera_rows.scaled(Hc, zc, scale, lo, hi)
             arrays = (F, b, Q, Hc, zc, use_c[lo:hi], Hk, zk, use_k[lo:hi])
             if not still[lo:hi].any():
                 return arrays

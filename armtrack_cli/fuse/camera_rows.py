@@ -44,9 +44,11 @@ def row_scale(z: np.ndarray, tau: float, px_per_frame: float) -> np.ndarray | No
     return np.where(still_patch(z, px_per_frame), 1.0 / np.sqrt(tau), 1.0)
 
 
-def scaled(Hc: np.ndarray, zc: np.ndarray, scale: np.ndarray | None) -> tuple:
-    """The camera rows Hc (n, 2, d), zc (n, 2) with each frame's scaled by ``scale`` (n,)
-    (row_scale; None: as they are)."""
+def scaled(Hc: np.ndarray, zc: np.ndarray, scale: np.ndarray | None, lo: int = 0,
+           hi: int | None = None) -> tuple:
+    """The camera rows Hc (m, 2, d), zc (m, 2) of frames lo … hi − 1, each frame's scaled by
+    its ``scale`` (the session's, row_scale; None: the rows as they are)."""
     if scale is None:
         return Hc, zc
-    return Hc * scale[:, None, None], zc * scale[:, None]
+    w = scale[lo:hi]
+    return Hc * w[:, None, None], zc * w[:, None]
