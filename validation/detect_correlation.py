@@ -7,8 +7,9 @@ The error is detect's (u, v) less the true wrist pixel on the frames it reported
 the session's mean error (detect's steady offset, the centroid against the wrist joint, is no
 correlation from frame to frame; a mean per run would take the held part away with it; a mean
 over all the sessions pooled gives still frames τ = 26-32, each session's still frames then
-holding their own offset, which the lags up to LAGS do not end). Still frames are those fuse/camera_rows.still_patch
-takes as still — read from the detections, as fuse reads them — the rest moving. The lag-k
+holding their own offset, which the lags up to LAGS do not end). Still frames are those
+fuse/camera_rows.still_patch takes as still — read from the detections, as fuse reads them —
+the rest moving. The lag-k
 autocorrelation ρ_k is pooled over the runs of consecutive frames of one class (pairs within a
 run) and both axes; the integrated autocorrelation time τ = 1 + 2 Σ ρ_k over k = 1, 2, … until ρ_k
 first drops below 0 (Geyer 1992's initial positive sequence): n frames of the error tell its mean
