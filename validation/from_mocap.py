@@ -340,7 +340,9 @@ def write(out: Path, mocap: list[str], synthetic: list[str], smoother: list[str]
         "the IMU recorded before the video, the camera's pose corrected as six static states "
         "from the board's covariance (`--set fuse.camera_pose=board`, fuse/camera_pose.py), and "
         "the camera rows' SD `detect`'s pixel error measured on the other trials (`--set "
-        "fuse.pixel_sigma=…`, 0.18-0.20 px, instead of the recipe's 4 px). "
+        "fuse.pixel_sigma=…`, 0.18-0.20 px, instead of the recipe's 4 px), its variance × τ "
+        "where the patch is still, τ how many frames detect's error stays correlated there, "
+        "measured on the other trials (`--set fuse.pixel_still_tau=…`, fuse/camera_rows.py). "
         "Scored: the drifting arm + rest with the declared arm (bold column).", "",
         *SMOOTHER, *(smoother or ["| (../shared/realdata/ue-adl/ not present) ||||||"]), "",
         *by_seed,

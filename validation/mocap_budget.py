@@ -234,8 +234,8 @@ def where_row(name: str, w: dict, truth_runs: list[float]) -> str:
 
 def rates_line(rates: list[tuple[float, ...]]) -> str:
     """The drifting arm's settings used, each trial's from the other trials (walk_rates,
-    arm_priors)."""
-    sh, ln, psh, pln, dx, dy, dz, dl, rest, px = np.array(rates).T * 100
+    arm_priors), and the rest update's and camera rows' (rest_speed, pixel_sd, pixel_tau)."""
+    sh, ln, psh, pln, dx, dy, dz, dl, rest, px, tau = np.array(rates).T * 100
     return (f"The drifting arm's settings, each trial's measured on the other six recordings: "
             f"random walks (median over trials of the RMS change over 1 s, per √s) of the "
             f"shoulder {sh.min():.2f}-{sh.max():.2f} cm/√s per axis and of the upper arm's length "
@@ -253,7 +253,11 @@ def rates_line(rates: list[tuple[float, ...]]) -> str:
             f"hand's velocity is not; median over trials): "
             f"{rest.min():.2f}-{rest.max():.2f} cm/s. The camera rows' SD (`fuse.pixel_sigma`, "
             f"the recipe's 4 px elsewhere), `detect`'s wrist pixel against the truth (RMS per "
-            f"axis over the ok frames): {px.min() / 100:.2f}-{px.max() / 100:.2f} px. "
+            f"axis over the ok frames): {px.min() / 100:.2f}-{px.max() / 100:.2f} px, × √τ on "
+            f"the frames whose detections move less than 0.5 px a frame, τ the integrated "
+            f"autocorrelation time of detect's error on such frames of the other trials "
+            f"(validation/detect_correlation.py): {tau.min() / 100:.1f}-{tau.max() / 100:.1f} "
+            f"frames. "
             f"The defaults (`shoulder_walk_m_s` 0.011, `upper_arm_walk_m_s` 0.023, "
             f"`shoulder_sd_m` 0.11, `upper_arm_sd_m` 0.06, offsets 0) centre the prior on the "
             f"declared arm, as wide as the spheres lie from it over all seven (RMS).")
