@@ -353,3 +353,28 @@ def test_in_place_pass_equals_the_matrix_form(d):
     xr, Pr, gr = _matrix_form(*args)
     assert gr.sum() > 3 and np.array_equal(gated, gr)
     assert np.abs(xs - xr).max() < 1e-9 and np.abs(Ps - Pr).max() < 1e-12
+
+
+def test_elbow_variance_is_the_diagonal_of_j_p_jt():
+    """_elbow_var from P's (p, δθ) blocks equals the diagonal of J P Jᵀ with the elbow's full
+    Jacobian J = [I, 0, −L2 [u]×, 0 …] (eq. 2) to 1e-12, on random covariances and
+    orientations, and on a covariance with no δθ part is P_pp's diagonal exactly."""
+    rng = np.random.default_rng(8)
+    n, d = 50, 15
+    A = rng.normal(size=(n, d, d))
+    P = A @ np.swapaxes(A, 1, 2) * 1e-4
+    x = rng.normal(size=(n, d)) * 0.02
+    q = quat.normalize(rng.normal(size=(n, 4)))
+    arm = models.Arm(shoulder=np.array([0.1, 0.5, 0.3]), L1=0.31, L2=0.27,
+                     forearm_B=np.array([0.0, 1.0, 0.0]))
+    u = quat.rotate(arm_smoother.corrected(q, x[:, 6:9]), arm.forearm_B)
+    J = np.zeros((n, 3, d))
+    J[:, :, :3] = np.eye(3)
+    ux = np.swapaxes(np.cross(u[:, None, :], np.eye(3)[None]), 1, 2)  # column j: u × e_j
+    J[:, :, 6:9] = -arm.L2 * ux
+    ref = np.diagonal(J @ P @ np.swapaxes(J, 1, 2), axis1=1, axis2=2)
+    got = arm_smoother._elbow_var(q, x, P, arm)
+    assert np.abs(got - ref).max() <= 1e-12 * np.abs(ref).max()
+    P[:, 6:9, :] = P[:, :, 6:9] = 0.0
+    assert np.array_equal(arm_smoother._elbow_var(q, x, P, arm),
+                          np.diagonal(P[:, :3, :3], axis1=1, axis2=2))

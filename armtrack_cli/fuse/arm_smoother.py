@@ -372,7 +372,7 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
             was[lo] = X[lo].copy()
             moved.append(np.abs(xs[:, P_] - X[lo:hi, P_]).max())
             X[lo:hi], var[lo:hi] = xs, np.diagonal(Ps[:, :6, :6], axis1=1, axis2=2)
-            elbow_var[lo:hi] = np.diagonal(_elbow_cov(q_hat[lo:hi], xs, Ps, arm), axis1=1, axis2=2)
+            elbow_var[lo:hi] = _elbow_var(q_hat[lo:hi], xs, Ps, arm)
 
         gated = smooth_blocked(*prior_, model, n, rc=s.pixel_sigma**2, rk=rk,
                                gate=float(s.gate_chi2) if s.gate_chi2 > 0 else np.inf,  # 0: off
@@ -413,10 +413,13 @@ def _rows(a, lo: int, hi: int):
     return type(a)(**{f.name: getattr(a, f.name)[lo:hi] for f in fields(a)})
 
 
-def _elbow_cov(q_hat: np.ndarray, x: np.ndarray, P: np.ndarray, arm: Arm) -> np.ndarray:
-    """(n, 3, 3) covariance of the elbow E = p − L2 u(δθ) (eq. 2): J P Jᵀ, J = ∂E/∂x."""
-    u = forearm(q_hat, x[:, TH], arm)
-    J = np.zeros((x.shape[0], 3, x.shape[1]))
-    J[:, :, P_] = np.eye(3)
-    J[:, :, TH] = -arm.L2 * imu_fold.skew(u)
-    return J @ P @ np.swapaxes(J, 1, 2)
+def _elbow_var(q_hat: np.ndarray, x: np.ndarray, P: np.ndarray, arm: Arm) -> np.ndarray:
+    """(n, 3) variances of the elbow E = p − L2 u(δθ) (eq. 2): the diagonal of J P Jᵀ,
+    J = ∂E/∂x = [I, 0, −L2 [u]×, 0 …], from P's (p, δθ) blocks alone: row i of J is
+    (e_i, −L2 [u]×_i), so var_i = P_pp,ii − 2 L2 [u]×_i P_θp,·i + L2² [u]×_i P_θθ [u]×_iᵀ
+    (a fortieth of the products of J P Jᵀ whole)."""
+    S = imu_fold.skew(forearm(q_hat, x[:, TH], arm))  # (n, 3, 3), row i: [u]×_i
+    pp = np.diagonal(P[:, P_, P_], axis1=1, axis2=2)
+    cross = np.einsum("nil,nli->ni", S, P[:, TH, P_])
+    quad = np.einsum("nik,nkl,nil->ni", S, P[:, TH, TH], S)
+    return pp - 2 * arm.L2 * cross + arm.L2**2 * quad
