@@ -203,6 +203,54 @@ def test_process_is_gauss_markov_with_the_stated_spread():
     assert np.allclose(np.diag(P)[12:], [0.03**2] + [0.02**2] * 3)
 
 
+def _process_by_blocks(fd, s, shoulder, period, track, camera):
+    """F, b, Q as the docstring's blocks say, each written whole: dt·I, [s]× (imu_fold.skew),
+    the walks' q·dt³/3·I …: the reference process() is held to bit for bit."""
+    n = fd.dt.size
+    d = arm_smoother.state_size(track is not None, camera, shoulder is not None)
+    dt, eye = fd.dt[:, None, None], np.eye(3)
+    P, V, T, A, G = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15))
+    F, b, Q = np.tile(np.eye(d), (n, 1, 1)), np.zeros((n, d)), np.zeros((n, d, d))
+    F[:, P, V], F[:, P, T], F[:, V, T] = dt * eye, imu_fold.skew(fd.s_p), imu_fold.skew(fd.s_v)
+    F[:, P, A], F[:, V, A] = -fd.B_p, -fd.B_v
+    b[:, P], b[:, V] = fd.dp, fd.dv
+    q = s.smoother_accel_noise**2 * period
+    Q[:, P, P], Q[:, V, V] = q * dt**3 / 3 * eye, q * dt * eye
+    Q[:, P, V] = Q[:, V, P] = q * dt**2 / 2 * eye
+    if track is not None:
+        b[:, T], F[:, T, G] = track.dtheta, track.G
+        Q[:, T, T] = np.deg2rad(s.orientation_walk_deg) ** 2 * dt * eye
+        Q[:, G, G] = np.deg2rad(s.gyro_bias_walk_deg_s) ** 2 * dt * eye
+    else:
+        phi = np.exp(-dt / s.orientation_tau_s)
+        F[:, T, T] = phi * eye
+        Q[:, T, T] = arm_smoother.orientation_var(s) * (1 - phi**2)
+    Q[:, A, A] = s.accel_bias_walk**2 * dt * eye
+    if shoulder is not None:
+        Q[:, d - 4:, d - 4:] = arm_smoother.drift_noise(fd.dt, s)
+    return F, b, Q
+
+
+@pytest.mark.parametrize("gyro", [True, False])
+@pytest.mark.parametrize("drifting", [True, False])
+@pytest.mark.parametrize("camera", [True, False])
+def test_process_writes_the_blocks_to_the_bit(gyro, drifting, camera):
+    """process() writes only the non-zero entries of its diagonal and cross-product blocks:
+    F, b, Q byte for byte those of the blocks written whole; noise=False: F, b alone."""
+    t = np.arange(0, 6, 0.01)
+    q_hat, w_B, _ = _turning(t, np.deg2rad([0.4, -0.3, 0.5]))
+    tf = np.arange(0.05, 5.9, 1 / 30) + np.random.default_rng(2).uniform(0, 1e-3, 176)
+    fd = imu_fold.fold(t, q_hat, np.tile([0.3, -0.2, 9.81], (t.size, 1)), tf)
+    track = imu_fold.orientation_track(t, q_hat, w_B, tf) if gyro else None
+    S0 = np.array([0.1, 0.2, 0.3]) if drifting else None
+    s = FuseSettings()
+    got = arm_smoother.process(fd, s, S0, 0.01, track, camera)
+    ref = _process_by_blocks(fd, s, S0, 0.01, track, camera)
+    assert all(g.tobytes() == r.tobytes() for g, r in zip(got, ref))
+    bare = arm_smoother.process(fd, s, S0, 0.01, track, camera, noise=False)
+    assert len(bare) == 2 and all(g.tobytes() == r.tobytes() for g, r in zip(bare, ref))
+
+
 def _turning(t, bias):
     """A body turning about a changing axis (closed form), its output orientation turned by a
     smooth known error δθ(t), and the gyro of the true rotation plus ``bias``: (q̂, ω̂, δθ)."""
@@ -305,3 +353,28 @@ def test_in_place_pass_equals_the_matrix_form(d):
     xr, Pr, gr = _matrix_form(*args)
     assert gr.sum() > 3 and np.array_equal(gated, gr)
     assert np.abs(xs - xr).max() < 1e-9 and np.abs(Ps - Pr).max() < 1e-12
+
+
+def test_elbow_variance_is_the_diagonal_of_j_p_jt():
+    """_elbow_var from P's (p, δθ) blocks equals the diagonal of J P Jᵀ with the elbow's full
+    Jacobian J = [I, 0, −L2 [u]×, 0 …] (eq. 2) to 1e-12, on random covariances and
+    orientations, and on a covariance with no δθ part is P_pp's diagonal exactly."""
+    rng = np.random.default_rng(8)
+    n, d = 50, 15
+    A = rng.normal(size=(n, d, d))
+    P = A @ np.swapaxes(A, 1, 2) * 1e-4
+    x = rng.normal(size=(n, d)) * 0.02
+    q = quat.normalize(rng.normal(size=(n, 4)))
+    arm = models.Arm(shoulder=np.array([0.1, 0.5, 0.3]), L1=0.31, L2=0.27,
+                     forearm_B=np.array([0.0, 1.0, 0.0]))
+    u = quat.rotate(arm_smoother.corrected(q, x[:, 6:9]), arm.forearm_B)
+    J = np.zeros((n, 3, d))
+    J[:, :, :3] = np.eye(3)
+    ux = np.swapaxes(np.cross(u[:, None, :], np.eye(3)[None]), 1, 2)  # column j: u × e_j
+    J[:, :, 6:9] = -arm.L2 * ux
+    ref = np.diagonal(J @ P @ np.swapaxes(J, 1, 2), axis1=1, axis2=2)
+    got = arm_smoother._elbow_var(q, x, P, arm)
+    assert np.abs(got - ref).max() <= 1e-12 * np.abs(ref).max()
+    P[:, 6:9, :] = P[:, :, 6:9] = 0.0
+    assert np.array_equal(arm_smoother._elbow_var(q, x, P, arm),
+                          np.diagonal(P[:, :3, :3], axis1=1, axis2=2))

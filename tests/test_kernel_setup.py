@@ -32,3 +32,25 @@ def test_arm_smoother_passes_load_with_the_smoothers_types(monkeypatch):
     assert set(loaded) == set(run) == {"filter_block", "rts_block"}
     for name in run:
         assert len(loaded[name]) == 1 and loaded[name] == run[name], name
+
+
+def test_branch_repairs_path_kernel_loads_with_the_repairs_types(monkeypatch):
+    """affine_path (fuse/path_kernel.py) as load_kernels loads it and as window_path runs it:
+    one set of numba types (a second would be loaded inside the timed run)."""
+    from armtrack_cli.fuse import branch_repair, path_kernel
+
+    seen, phase = {}, ["load"]
+
+    def record(*args, f=path_kernel.affine_path):
+        seen.setdefault(phase[0], set()).add(tuple(typeof(a) for a in args))
+        return f(*args)
+
+    monkeypatch.setattr(path_kernel, "affine_path", record)
+    monkeypatch.setattr(branch_repair, "affine_path", record)
+    kernel_setup._load_smoother_passes()
+    phase[0] = "run"
+    rng = np.random.default_rng(3)
+    F = np.tile(np.eye(15), (30, 1, 1)) + 0.01 * rng.normal(size=(30, 15, 15))
+    branch_repair.window_path(lambda lo, hi: (F[lo:hi], rng.normal(size=(hi - lo, 15))),
+                              0, 30, rng.normal(size=15), block=8)
+    assert len(seen["load"]) == 1 and seen["load"] == seen["run"]

@@ -33,6 +33,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from armtrack_cli.fuse.path_kernel import affine_path
+
 MIN_GAP_M = 0.02  # the roots this far apart at least on every frame of a run: nearer, the ray
 #                   grazes the sphere and either root is about as good
 MARGIN = 15  # frames either side of a run in its window (0.5 s at 30 fps)
@@ -56,25 +58,28 @@ def roots_of(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M) ->
 
 
 def branch_runs(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M,
-                min_frames: int = MIN_FRAMES) -> list[tuple[int, int, int]]:
+                min_frames: int = MIN_FRAMES, root: np.ndarray | None = None
+                ) -> list[tuple[int, int, int]]:
     """(lo, hi, root) for each run of frames lo … hi − 1 whose positions p (n, 3) sit nearer
     the same root points[:, root] (points (n, 2, 3), NaN: no detection) while the two roots
-    are at least min_gap_m apart; runs of fewer than min_frames frames left out."""
-    root = roots_of(p, points, min_gap_m)
+    are at least min_gap_m apart; runs of fewer than min_frames frames left out. ``root``:
+    roots_of(p, points, min_gap_m) when the caller has it."""
+    root = roots_of(p, points, min_gap_m) if root is None else root
     edges = np.flatnonzero(np.diff(np.r_[UNSEEN, root, UNSEEN]) != 0)  # where runs start, end
     return [(int(lo), int(hi), int(root[lo])) for lo, hi in zip(edges[:-1], edges[1:])
             if root[lo] >= 0 and hi - lo >= min_frames]
 
 
-def candidates(p: np.ndarray, points: np.ndarray,
-               min_gap_m: float = MIN_GAP_M) -> list[tuple[int, int, int]]:
+def candidates(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M,
+               root: np.ndarray | None = None) -> list[tuple[int, int, int]]:
     """The stretches (lo, hi, root) that ``repair`` tests: every run (``branch_runs``), and
     every chain of two or more runs on the same root with only grazing frames between them
     (a path that stays on one root while the ray nearly touches the sphere: the wrist need not
     have changed root there, and a wrong stretch is often cut so into short pieces); each
-    with the grazing frames that border it, which a path leaving the wrong root crosses."""
-    runs = branch_runs(p, points, min_gap_m, min_frames=1)
-    root = roots_of(p, points, min_gap_m)
+    with the grazing frames that border it, which a path leaving the wrong root crosses.
+    ``root``: roots_of(p, points, min_gap_m) when the caller has it."""
+    root = roots_of(p, points, min_gap_m) if root is None else root
+    runs = branch_runs(p, points, min_gap_m, min_frames=1, root=root)
     spans = [r for r in runs if r[1] - r[0] >= MIN_FRAMES]
     i = 0
     while i < len(runs):
@@ -119,25 +124,30 @@ def window_path(steps: Steps, lo: int, hi: int, x: np.ndarray,
                 block: int = PATH_BLOCK) -> tuple[np.ndarray, np.ndarray]:
     """imu_path over the steps into frames lo … hi − 1, taken from ``steps`` ``block`` frames
     at a time: a run can be most of a session, whose F whole would be tens of MB (issue 15).
-    The same additions in the same order as one imu_path over them all."""
+    The same additions in the same order as one imu_path over them all (the frames stepped
+    by a compiled loop, fuse/path_kernel.py)."""
     x = np.array(x, float)
     x[:6] = 0.0
     D, tau = np.zeros((hi - lo + 1, 3)), np.zeros(hi - lo + 1)
     for a in range(lo, hi, block):
         F, b = steps(a, min(a + block, hi))
-        for j in range(F.shape[0]):
-            x = F[j] @ x + b[j]
-            D[a - lo + j + 1] = x[:3]
+        affine_path(np.ascontiguousarray(F, float), np.ascontiguousarray(b, float), x, D,
+                    a - lo + 1)
         tau[a - lo:a - lo + F.shape[0] + 1] = np.cumsum(np.r_[tau[a - lo], F[:, 0, 3]])
     return D, tau
 
 
 def misfit(P: np.ndarray, D: np.ndarray, tau: np.ndarray) -> float:
-    """RMS (m) of P (m, 3) − D − (p₀ + v₀ τ) with p₀, v₀ fitted by least squares."""
-    A = np.c_[np.ones_like(tau), tau]
+    """RMS (m) of P (m, 3) − D − (p₀ + v₀ τ) with p₀, v₀ fitted by least squares: the line's
+    closed form about the means (v₀ = Σ τ' y' / Σ τ'², τ' = τ − τ̄, y' = y − ȳ; v₀ = 0 when
+    every τ is the same), a tenth of lstsq's time on a 2-column fit."""
     Y = P - D
-    coef = np.linalg.lstsq(A, Y, rcond=None)[0]
-    return float(np.sqrt(np.mean(np.sum((Y - A @ coef) ** 2, axis=1))))
+    Y = Y - Y.mean(axis=0)
+    tc = tau - tau.mean()
+    ss = tc @ tc
+    v0 = (tc @ Y) / ss if ss > 0 else np.zeros(Y.shape[1])
+    R = Y - tc[:, None] * v0
+    return float(np.sqrt(np.mean(np.sum(R * R, axis=1))))
 
 
 def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float = MIN_GAP_M,
@@ -155,8 +165,8 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
     tested again, and so on."""
     n = X.shape[0]
     X = X.copy()
-    cands = candidates(X[:, :3], points, min_gap_m)
     code = roots_of(X[:, :3], points, min_gap_m)
+    cands = candidates(X[:, :3], points, min_gap_m, root=code)
     windows = [(max(lo - margin, 0), min(hi + margin, n)) for lo, hi, _ in cands]
     paths = []
     for a, e in windows:  # the IMU's path over each window: the same whichever root

@@ -39,13 +39,15 @@ def load_kernels(method: str) -> None:
 
 def _load_smoother_passes() -> None:
     """Load the passes the arm smoother runs (fuse/smoother_blocks.py: filter_block and
-    rts_block; not smooth, which only arm_refine's "auto" arm runs, before this) on a
-    two-frame problem with the argument types smooth_blocked gives them: other types would
+    rts_block; the wrong-root repair's affine_path; not smooth, which only arm_refine's
+    "auto" arm runs, before this) on a two-frame problem with the argument types
+    smooth_blocked (branch_repair.window_path) gives them: other types would
     load another specialisation, and the timed run would load theirs again (about 30 ms).
     Their callees are not loaded first as pf_kernel.load_passes does for the particle filter's:
     on a 1,024-frame block of long-10 that made filter_block 2 % faster and rts_block 2 %
     slower (3.45 -> 3.38 and 7.52 -> 7.66 ms, medians of 20 fresh processes each, alternated,
     load 1), and the two passes' CPU time in a long-10 fuse the same."""
+    from armtrack_cli.fuse.path_kernel import affine_path
     from armtrack_cli.fuse.smoother_kernel import filter_block, rts_block
 
     d, n = 12, 2
@@ -55,3 +57,4 @@ def _load_smoother_passes() -> None:
                  np.zeros((n, 2)), np.ones(n, bool), 1.0, np.zeros((n, d)), np.zeros(n),
                  np.ones(n, bool), 1.0, 13.8, True, n, xf, Pf, np.zeros(n, bool))
     rts_block(xf, Pf, n, e, np.zeros((n, d)), e, np.zeros(d), np.eye(d), True)
+    affine_path(e, np.zeros((n, d)), np.zeros(d), np.zeros((n + 1, 3)), 1)  # branch_repair

@@ -30,7 +30,8 @@ KERNEL_MODULES = (  # every module that imports numba (tests/test_kernel_cache.p
     "detect/yuv_pixel.py", "filters/fast_exp.py", "filters/splitmix.py",
     "fuse/association_kernel.py", "fuse/gaussian_kernel.py", "fuse/imu_error.py",
     "fuse/palm_kernel.py", "fuse/pf_guard_kernel.py", "fuse/pf_kernel.py",
-    "fuse/pf_resample_kernel.py", "fuse/projection_kernel.py", "fuse/smoother_kernel.py")
+    "fuse/path_kernel.py", "fuse/pf_resample_kernel.py", "fuse/projection_kernel.py",
+    "fuse/smoother_kernel.py")
 STALE_DAYS = 30  # a kernel folder not used for this long goes when a new one is made
 
 
