@@ -14,21 +14,16 @@ the data's and differ from one venv to another). The highest sample is the highe
 
 from __future__ import annotations
 
-import re
 import resource
 import sys
 import threading
 import time
 import traceback
 
+from armtrack_cli.session.proc_status import status
+
 KEYS = ("VmRSS", "RssAnon", "RssFile", "VmHWM")
 DEPTH = 2  # the frames that name a phase
-
-
-def _status() -> dict[str, float]:
-    """VmRSS, RssAnon, RssFile and VmHWM of this process, MB."""
-    text = open("/proc/self/status").read()
-    return {k: int(re.search(rf"{k}:\s*(\d+)", text).group(1)) / 1024 for k in KEYS}
 
 
 def _where(ident: int) -> tuple[str, ...]:
@@ -66,7 +61,7 @@ def main() -> None:
 
     def sample() -> None:
         while not done.is_set():
-            st = _status()
+            st = status(*KEYS)
             log.append((time.perf_counter(), st["RssAnon"], st["RssFile"], _where(main_id)))
             time.sleep(0.02)
 
@@ -78,7 +73,7 @@ def main() -> None:
     stage = args[1] if len(args) > 1 else "fuse"
     getattr(pipeline, stage)(args[0], **({"through": "compare"} if stage == "run" else {}))
     done.set()
-    end = _status()
+    end = status(*KEYS)
     from armtrack_cli.pipeline.apart import together_mb
 
     child = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024  # a stage apart
