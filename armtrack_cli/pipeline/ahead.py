@@ -1,0 +1,148 @@
+"""What `armtrack run` does in its own process while detect runs in a child (pipeline/apart.py;
+issue 15): the part of fuse and compare that needs no detection. Their modules imported (numba
+among them), the IMU read (pipeline/fuse.read_imu_part) and the ground truth read and denoised
+(pipeline/compare.read_truth_part). On two cores detect's decoding thread takes about one and
+its detection thread part of the other; this takes the rest, at a lower priority (NICE), so
+that it slows detect as little as it can, and whatever is left of it runs once detect is done.
+Not the compiled kernels' loading (fuse/kernel_setup.py): ~0.4 s for ~40 MB of anonymous
+memory, which held beside detect's child would put `armtrack run` on a 10-minute session
+above its memory goal (the imports hold ~24 MB, the IMU and truth of 10 minutes ~10).
+
+fuse and compare take what was read here (``take_imu``, ``take_truth``: the same functions on
+the same files as they would call, so the same bytes out) and read it themselves when it is
+not here. Nothing here fails a run: an error leaves that part undone, for the stage to do (and
+to raise) in its own turn; the warnings a part gave are given again when its stage takes it."""
+
+from __future__ import annotations
+
+import importlib
+import os
+import resource
+import threading
+import time
+import warnings
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any
+
+from armtrack_cli.core.methods import PALM_METHODS
+from armtrack_cli.pipeline.common import release_memory
+from armtrack_cli.session.config import Session
+
+NICE = 10  # the reading's priority below detect's while both run: CPU shares 1 : ~10
+MAX_BYTES = 16 << 20  # an IMU or ground-truth file read ahead at most this large (a 10-minute
+#                       session's are 6.4 and 5.2 MB, a 60-minute one's 39 and 31): a longer
+#                       session's arrays, held beside detect's child (and the truth's through
+#                       fuse), would raise run's peak memory (issue 15); its stages read them
+MODULES = ("armtrack_cli.pipeline.fuse", "armtrack_cli.pipeline.compare",  # and what they
+           "armtrack_cli.fuse.trajectory", "armtrack_cli.session.column_csv",  # import when
+           "armtrack_cli.session.tables")  # they run
+
+
+@dataclass
+class Ahead:
+    """What was read ahead (each a one-element list that its stage empties, or empty) and
+    how long the reading took (s, wall)."""
+
+    imu: list = field(default_factory=list)  # [(pipeline.fuse.ImuRead, its warnings)]
+    truth: list = field(default_factory=list)  # [(pipeline.compare.TruthRead, its warnings)]
+    seconds: float = 0.0
+
+    def take_imu(self) -> list | None:
+        """[the IMU read ahead] for fuse's ``imu`` (its warnings given now), else None."""
+        return _taken(self.imu)
+
+    def take_truth(self) -> list | None:
+        """[the truth read ahead] for compare's ``truth`` (its warnings given now), else None."""
+        return _taken(self.truth)
+
+
+def _taken(box: list) -> list | None:
+    if not box:
+        return None
+    value, said = box.pop()
+    for w in said:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return [value]
+
+
+def read_ahead(session: Session, methods: tuple[str, ...], *, compare: bool,
+               beside=None) -> Ahead:
+    """fuse's (for ``methods``) and, with ``compare``, compare's part that needs no detection;
+    ``beside``: the detect child (pipeline/apart.Apart), told the caller's memory after each
+    part while it runs."""
+    start, ahead = time.perf_counter(), Ahead()
+    arm = tuple(m for m in methods if m not in PALM_METHODS)
+    with _lower_priority():
+        for name in MODULES:
+            _quietly(importlib.import_module, name)
+        _held(beside)
+        if arm and session.imu is not None and _small(session.imu.file):
+            from armtrack_cli.pipeline.fuse import read_imu_part
+
+            ahead.imu = _boxed(read_imu_part, session)
+            _held(beside)
+        if (compare and session.groundtruth is not None and session.palm is None
+                and _small(session.groundtruth.file)):
+            from armtrack_cli.pipeline.compare import read_truth_part
+
+            ahead.truth = _boxed(read_truth_part, session)
+            _held(beside)
+    ahead.seconds = time.perf_counter() - start
+    return ahead
+
+
+def _small(path) -> bool:
+    """Whether ``path`` is at most MAX_BYTES (False where it cannot be read: its stage says
+    why)."""
+    try:
+        return os.path.getsize(path) <= MAX_BYTES
+    except OSError:
+        return False
+
+
+def _held(beside) -> None:
+    """What a part freed handed back (release_memory), and what it keeps counted beside the
+    detect child's (pipeline/apart.Apart.held)."""
+    release_memory()
+    if beside is not None:
+        beside.held()
+
+
+def _boxed(fn, *args) -> list:
+    """[(fn(*args), the warnings it gave)], or [] if it raised."""
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        try:
+            value = fn(*args)
+        except Exception:  # its stage meets it again, in its turn
+            return []
+    return [(value, list(said))]
+
+
+def _quietly(fn, *args) -> Any:
+    try:
+        return fn(*args)
+    except Exception:  # its stage meets it again, in its turn
+        return None
+
+
+@contextmanager
+def _lower_priority():
+    """This thread NICE steps below its priority while inside, where it may come back up
+    after (root, or RLIMIT_NICE allowing it); else unchanged."""
+    try:
+        tid = threading.get_native_id()
+        old = os.getpriority(os.PRIO_PROCESS, tid)
+        soft = resource.getrlimit(resource.RLIMIT_NICE)[0]
+    except (AttributeError, OSError):  # not Linux
+        yield
+        return
+    if not (os.geteuid() == 0 or soft == resource.RLIM_INFINITY or 20 - soft <= old):
+        yield
+        return
+    os.setpriority(os.PRIO_PROCESS, tid, min(old + NICE, 19))
+    try:
+        yield
+    finally:
+        os.setpriority(os.PRIO_PROCESS, tid, old)
