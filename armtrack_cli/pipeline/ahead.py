@@ -21,7 +21,6 @@ import resource
 import threading
 import time
 import warnings
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -70,24 +69,31 @@ def read_ahead(session: Session, methods: tuple[str, ...], *, compare: bool,
                beside=None) -> Ahead:
     """fuse's (for ``methods``) and, with ``compare``, compare's part that needs no detection;
     ``beside``: the detect child (pipeline/apart.Apart), told the caller's memory after each
-    part while it runs."""
+    part while it runs; once it has ended, the rest runs at this thread's own priority."""
     start, ahead = time.perf_counter(), Ahead()
     arm = tuple(m for m in methods if m not in PALM_METHODS)
-    with _lower_priority():
+    with _Lowered() as nice:
+        def between() -> None:  # what a part freed handed back, what it keeps counted
+            release_memory()
+            if beside is not None:
+                beside.held()
+                if not beside.running():
+                    nice.restore()
+
         for name in MODULES:
             _quietly(importlib.import_module, name)
-        _held(beside)
+        between()
         if arm and session.imu is not None and _small(session.imu.file):
             from armtrack_cli.pipeline.fuse import read_imu_part
 
             ahead.imu = _boxed(read_imu_part, session)
-            _held(beside)
+            between()
         if (compare and session.groundtruth is not None and session.palm is None
                 and _small(session.groundtruth.file)):
             from armtrack_cli.pipeline.compare import read_truth_part
 
             ahead.truth = _boxed(read_truth_part, session)
-            _held(beside)
+            between()
     ahead.seconds = time.perf_counter() - start
     return ahead
 
@@ -99,14 +105,6 @@ def _small(path) -> bool:
         return os.path.getsize(path) <= MAX_BYTES
     except OSError:
         return False
-
-
-def _held(beside) -> None:
-    """What a part freed handed back (release_memory), and what it keeps counted beside the
-    detect child's (pipeline/apart.Apart.held)."""
-    release_memory()
-    if beside is not None:
-        beside.held()
 
 
 def _boxed(fn, *args) -> list:
@@ -127,22 +125,28 @@ def _quietly(fn, *args) -> Any:
         return None
 
 
-@contextmanager
-def _lower_priority():
-    """This thread NICE steps below its priority while inside, where it may come back up
-    after (root, or RLIMIT_NICE allowing it); else unchanged."""
-    try:
-        tid = threading.get_native_id()
-        old = os.getpriority(os.PRIO_PROCESS, tid)
-        soft = resource.getrlimit(resource.RLIMIT_NICE)[0]
-    except (AttributeError, OSError):  # not Linux
-        yield
-        return
-    if not (os.geteuid() == 0 or soft == resource.RLIM_INFINITY or 20 - soft <= old):
-        yield
-        return
-    os.setpriority(os.PRIO_PROCESS, tid, min(old + NICE, 19))
-    try:
-        yield
-    finally:
-        os.setpriority(os.PRIO_PROCESS, tid, old)
+class _Lowered:
+    """This thread NICE steps below its priority inside ``with`` (until ``restore()``), where
+    it may come back up after (root, or RLIMIT_NICE allowing it); else unchanged."""
+
+    def __enter__(self) -> _Lowered:
+        self._old = None
+        try:
+            tid = threading.get_native_id()
+            old = os.getpriority(os.PRIO_PROCESS, tid)
+            soft = resource.getrlimit(resource.RLIMIT_NICE)[0]
+            if os.geteuid() == 0 or soft == resource.RLIM_INFINITY or 20 - soft <= old:
+                os.setpriority(os.PRIO_PROCESS, tid, min(old + NICE, 19))
+                self._old = (tid, old)
+        except (AttributeError, OSError):  # not Linux, or not allowed: unchanged
+            pass
+        return self
+
+    def restore(self) -> None:
+        if self._old is not None:
+            tid, old = self._old
+            self._old = None
+            os.setpriority(os.PRIO_PROCESS, tid, old)
+
+    def __exit__(self, *exc) -> None:
+        self.restore()

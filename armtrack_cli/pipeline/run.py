@@ -108,9 +108,8 @@ def _detect(session: Session, work: WorkFolder, recipe, sets, ahead, done: Ahead
 
 
 def _stage(name: str) -> Callable[..., dict[str, Any]]:
-    """fuse or compare, imported when its step runs: numba and scipy are not in this process
-    while detect runs beside it in its own (pipeline/apart.py; about 25 MB of anonymous
-    memory held meanwhile, issue 15)."""
+    """fuse or compare, imported when its step runs (already, where detect's step read ahead
+    for them: pipeline/ahead.py)."""
     import importlib
 
     return getattr(importlib.import_module(f"armtrack_cli.pipeline.{name}"), name)
