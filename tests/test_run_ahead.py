@@ -4,12 +4,16 @@ reading its own inputs; and what was read ahead is what the stages use (read onc
 
 from __future__ import annotations
 
+import importlib
+
 import pytest
 
 from armtrack_cli import pipeline
-from armtrack_cli.pipeline import compare as compare_stage
-from armtrack_cli.pipeline import fuse as fuse_stage
 from armtrack_cli.simulate.arm_session import ArmSimSettings
+
+# the modules (pipeline.fuse and pipeline.compare are the stages' functions)
+fuse_stage = importlib.import_module("armtrack_cli.pipeline.fuse")
+compare_stage = importlib.import_module("armtrack_cli.pipeline.compare")
 
 METHODS = ("ekf", "arm-smoother")  # the first takes the IMU read ahead, the second reads it
 
