@@ -81,3 +81,26 @@ def test_a_part_that_fails_ahead_is_left_to_its_stage(session, tmp_path, monkeyp
     got = read_ahead(load_session(session), ("arm-smoother",), compare=True)
     assert got.take_imu() is None and got.take_truth() is not None
     assert got.take_truth() is None  # taken once
+
+
+def test_the_reading_runs_below_detects_priority_until_detect_ends():
+    import os
+    import threading
+    import time
+
+    from armtrack_cli.pipeline.ahead import NICE, _Lowered
+    from armtrack_cli.pipeline.apart import Apart
+
+    tid = threading.get_native_id()
+    before = os.getpriority(os.PRIO_PROCESS, tid)
+    if before + NICE > 19 or os.geteuid() != 0:
+        pytest.skip("cannot come back up from a lowered priority here")
+    child = Apart("time", "sleep", 1.0)
+    with _Lowered(child):
+        assert os.getpriority(os.PRIO_PROCESS, tid) == before + NICE
+        child.result()
+        deadline = time.monotonic() + 5
+        while os.getpriority(os.PRIO_PROCESS, tid) != before and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert os.getpriority(os.PRIO_PROCESS, tid) == before  # detect done: back up
+    assert os.getpriority(os.PRIO_PROCESS, tid) == before

@@ -72,13 +72,11 @@ def read_ahead(session: Session, methods: tuple[str, ...], *, compare: bool,
     part while it runs; once it has ended, the rest runs at this thread's own priority."""
     start, ahead = time.perf_counter(), Ahead()
     arm = tuple(m for m in methods if m not in PALM_METHODS)
-    with _Lowered() as nice:
+    with _Lowered(beside):
         def between() -> None:  # what a part freed handed back, what it keeps counted
             release_memory()
             if beside is not None:
                 beside.held()
-                if not beside.running():
-                    nice.restore()
 
         for name in MODULES:
             _quietly(importlib.import_module, name)
@@ -126,11 +124,14 @@ def _quietly(fn, *args) -> Any:
 
 
 class _Lowered:
-    """This thread NICE steps below its priority inside ``with`` (until ``restore()``), where
-    it may come back up after (root, or RLIMIT_NICE allowing it); else unchanged."""
+    """This thread NICE steps below its priority inside ``with``, or until ``beside`` (an
+    Apart) has ended (a thread looks every 50 ms), where it may come back up after (root, or
+    RLIMIT_NICE allowing it); else unchanged."""
+
+    def __init__(self, beside=None):
+        self._beside, self._old, self._lock = beside, None, threading.Lock()
 
     def __enter__(self) -> _Lowered:
-        self._old = None
         try:
             tid = threading.get_native_id()
             old = os.getpriority(os.PRIO_PROCESS, tid)
@@ -139,14 +140,21 @@ class _Lowered:
                 os.setpriority(os.PRIO_PROCESS, tid, min(old + NICE, 19))
                 self._old = (tid, old)
         except (AttributeError, OSError):  # not Linux, or not allowed: unchanged
-            pass
+            return self
+        if self._beside is not None:
+            threading.Thread(target=self._after, args=(self._beside,), daemon=True).start()
         return self
 
+    def _after(self, beside) -> None:
+        while beside.running() and self._old is not None:  # (a poll, not a wait: the
+            time.sleep(0.05)  # caller's polls would find the child running while one waits)
+        self.restore()
+
     def restore(self) -> None:
-        if self._old is not None:
-            tid, old = self._old
-            self._old = None
-            os.setpriority(os.PRIO_PROCESS, tid, old)
+        with self._lock:
+            if self._old is not None:
+                os.setpriority(os.PRIO_PROCESS, *self._old)
+                self._old = None
 
     def __exit__(self, *exc) -> None:
         self.restore()
