@@ -104,3 +104,23 @@ def test_the_reading_runs_below_detects_priority_until_detect_ends():
             time.sleep(0.01)
         assert os.getpriority(os.PRIO_PROCESS, tid) == before  # detect done: back up
     assert os.getpriority(os.PRIO_PROCESS, tid) == before
+
+
+def test_a_warning_given_ahead_is_given_again_when_its_stage_takes_the_part(session,
+                                                                           monkeypatch):
+    import warnings
+
+    from armtrack_cli.pipeline.ahead import read_ahead
+    from armtrack_cli.session.config import load_session
+
+    def warns(s):
+        warnings.warn("odd units", UserWarning, stacklevel=1)
+        return "the imu"
+
+    monkeypatch.setattr(fuse_stage, "read_imu_part", warns)
+    with warnings.catch_warnings(record=True) as early:
+        warnings.simplefilter("always")
+        got = read_ahead(load_session(session), ("arm-smoother",), compare=False)
+    assert early == [] and got.truth == []
+    with pytest.warns(UserWarning, match="odd units"):
+        assert got.take_imu() == ["the imu"]
