@@ -1,12 +1,12 @@
 """What `armtrack run` does in its own process while detect runs in a child (pipeline/apart.py;
-issue 15): the part of fuse and compare that needs no detection. Their modules imported (numba
-among them), the IMU read (pipeline/fuse.read_imu_part) and the ground truth read and denoised
-(pipeline/compare.read_truth_part). On two cores detect's decoding thread takes about one and
-its detection thread part of the other; this takes the rest, at a lower priority (NICE), so
-that it slows detect as little as it can, and whatever is left of it runs once detect is done.
-Not the compiled kernels' loading (fuse/kernel_setup.py): ~0.4 s for ~40 MB of anonymous
-memory, which held beside detect's child would put `armtrack run` on a 10-minute session
-above its memory goal (the imports hold ~24 MB, the IMU and truth of 10 minutes ~10).
+issue 15): the part of fuse and compare that needs no detection, as far as it is worth its
+memory (TRUTH_MAX_BYTES below): the ground truth read and denoised
+(pipeline/compare.read_truth_part), a short session's IMU read (pipeline/fuse.read_imu_part),
+their modules imported (numba among them). On two cores detect's decoding thread takes about
+one and its detection thread part of the other; this takes the rest, at a lower priority
+(NICE), so that it slows detect as little as it can, and whatever is left of it runs once
+detect is done. Not the compiled kernels' loading (fuse/kernel_setup.py): ~0.4 s for ~40 MB
+of anonymous memory held beside detect's child.
 
 fuse and compare take what was read here (``take_imu``, ``take_truth``: the same functions on
 the same files as they would call, so the same bytes out) and read it themselves when it is
@@ -29,10 +29,18 @@ from armtrack_cli.pipeline.common import release_memory
 from armtrack_cli.session.config import Session
 
 NICE = 10  # the reading's priority below detect's while both run: CPU shares 1 : ~10
-MAX_BYTES = 16 << 20  # an IMU or ground-truth file read ahead at most this large (a 10-minute
-#                       session's are 6.4 and 5.2 MB, a 60-minute one's 39 and 31): a longer
-#                       session's arrays, held beside detect's child (and the truth's through
-#                       fuse), would raise run's peak memory (issue 15); its stages read them
+# What is worth its memory (issue 15: `armtrack run` at most 300 MB; its peak with detect's
+# child is the child's plus this process's anonymous memory). On long-10 this process holds
+# 21.5 MB as detect starts; the imports add 23.8 MB (0.5-0.7 s of CPU, numba's most of it);
+# the ground truth 10.5 MB, read at a peak of +24 (0.55 s: its read and Winter's residual
+# filtering); the IMU 9.2 MB, at a peak of +20 (0.28 s). All three put the sum ~56 MB above
+# detect's alone (~309 MB on make bench's scale); the truth and the imports ~35 (~288); so the
+# IMU is read ahead only from a short session's file, and the truth before the imports, so
+# that its reading's peak comes before their memory is held.
+TRUTH_MAX_BYTES = 16 << 20  # a 10-minute Qualisys file is 5.2 MB, a 60-minute one 31: held
+#                             beside detect and through fuse, that one's arrays (52 MB) would
+#                             raise run's peak
+IMU_MAX_BYTES = 2 << 20  # a 1-minute IMU file is 0.65 MB, a 10-minute one 6.4
 MODULES = ("armtrack_cli.pipeline.fuse", "armtrack_cli.pipeline.compare",  # and what they
            "armtrack_cli.fuse.trajectory", "armtrack_cli.session.column_csv",  # import when
            "armtrack_cli.session.tables")  # they run
@@ -78,29 +86,29 @@ def read_ahead(session: Session, methods: tuple[str, ...], *, compare: bool,
             if beside is not None:
                 beside.held()
 
-        for name in MODULES:
-            _quietly(importlib.import_module, name)
-        between()
-        if arm and session.imu is not None and _small(session.imu.file):
-            from armtrack_cli.pipeline.fuse import read_imu_part
-
-            ahead.imu = _boxed(read_imu_part, session)
-            between()
         if (compare and session.groundtruth is not None and session.palm is None
-                and _small(session.groundtruth.file)):
+                and _small(session.groundtruth.file, TRUTH_MAX_BYTES)):
             from armtrack_cli.pipeline.compare import read_truth_part
 
             ahead.truth = _boxed(read_truth_part, session)
             between()
+        if arm and session.imu is not None and _small(session.imu.file, IMU_MAX_BYTES):
+            from armtrack_cli.pipeline.fuse import read_imu_part
+
+            ahead.imu = _boxed(read_imu_part, session)
+            between()
+        for name in MODULES:
+            _quietly(importlib.import_module, name)
+        between()
     ahead.seconds = time.perf_counter() - start
     return ahead
 
 
-def _small(path) -> bool:
-    """Whether ``path`` is at most MAX_BYTES (False where it cannot be read: its stage says
-    why)."""
+def _small(path, most: int) -> bool:
+    """Whether ``path`` is at most ``most`` bytes (False where it cannot be read: its stage
+    says why)."""
     try:
-        return os.path.getsize(path) <= MAX_BYTES
+        return os.path.getsize(path) <= most
     except OSError:
         return False
 

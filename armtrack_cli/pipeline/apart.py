@@ -16,11 +16,14 @@ import os
 import pickle
 import subprocess
 import sys
+import threading
+import time
 from typing import Any
 
 from armtrack_cli.session.proc_status import status_mb
 
 _CHILD = "from armtrack_cli.pipeline.apart import child; child()"
+WATCH_S = 0.01  # how often a watched child's caller's memory is looked at (/proc: ~30 µs)
 _TOGETHER = [0.0]  # MB, the highest of together_mb's sums so far in this process
 
 
@@ -42,9 +45,10 @@ class Apart:
     """``module.name(*args, **kwargs)`` started in a child process; the caller goes on (its
     own work beside the child's: pipeline/ahead.py) until ``result()``. The caller's anonymous
     memory counts in together_mb at its highest of the start, each ``held()`` while the child
-    runs and the child's end."""
+    runs and the child's end; with ``watch``, also every WATCH_S while the child runs (a thread
+    looks: the caller's work has peaks between its own ``held()``s)."""
 
-    def __init__(self, module: str, name: str, *args, **kwargs):
+    def __init__(self, module: str, name: str, *args, watch: bool = False, **kwargs):
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
         self._what = f"{module}.{name}"
         self._held, self._out = status_mb("RssAnon"), None
@@ -55,6 +59,13 @@ class Apart:
             self._proc.stdin.close()
         except BrokenPipeError:  # it died at once: result() says so
             pass
+        if watch:
+            threading.Thread(target=self._watch, daemon=True).start()
+
+    def _watch(self) -> None:
+        while self.running():
+            self.held()
+            time.sleep(WATCH_S)
 
     def running(self) -> bool:
         return self._proc.poll() is None

@@ -92,7 +92,7 @@ def _detect(session: Session, work: WorkFolder, recipe, sets, ahead, done: Ahead
     results put in ``done`` for fuse and compare. The result's ``read_ahead``: how long the
     reading took and how long detect ran on after it (s; negative: the reading's overrun)."""
     child = Apart("armtrack_cli.pipeline.detect", "detect", session.root, out=work.path,
-                  recipe=recipe, sets=sets)
+                  recipe=recipe, sets=sets, watch=ahead is not None)
     if ahead is None:
         return child.result()
     try:
