@@ -48,7 +48,7 @@ def _methods(session: Session, methods, recipe, sets) -> tuple[str, ...]:
 
 
 def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe, sets,
-         seed: int | None, ahead: Callable[[Apart], Ahead] | None = None) -> list[Step]:
+         seed: int | None, ahead: Callable[..., Ahead] | None = None) -> list[Step]:
     """The steps for this session, in order; a stage whose section is absent is left out.
     ``ahead(beside=child)``: what to read while detect's child runs (read_ahead), fuse and compare
     taking it from there; None: nothing (each stage reads its own)."""
@@ -90,7 +90,7 @@ def _detect(session: Session, work: WorkFolder, recipe, sets, ahead, done: Ahead
             ) -> dict[str, Any]:
     """detect in a child process; meanwhile ``ahead(beside=child)`` (if given) in this one, its
     results put in ``done`` for fuse and compare. The result's ``read_ahead``: how long the
-    reading took and how long detect ran on after it (s; negative: the reading's overrun)."""
+    reading took and how long detect ran on after it (s; 0: the reading outlasted detect)."""
     child = Apart("armtrack_cli.pipeline.detect", "detect", session.root, out=work.path,
                   recipe=recipe, sets=sets, watch=ahead is not None)
     if ahead is None:
