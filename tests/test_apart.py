@@ -57,3 +57,52 @@ def test_the_peak_together_counts_this_process_and_the_child():
 def test_what_the_stage_prints_does_not_spoil_the_answer(capfd):
     assert call_apart("builtins", "print", "said by the stage") is None
     assert "said by the stage" in capfd.readouterr().err
+
+
+def test_the_caller_works_beside_the_child_and_its_memory_then_counts(monkeypatch):
+    """Apart: the child runs while the caller goes on; what the caller holds at a held()
+    while the child runs counts in together_mb beside the child's peak."""
+    import numpy as np
+
+    from armtrack_cli.pipeline import apart
+
+    monkeypatch.setattr(apart, "_TOGETHER", [0.0])  # not an earlier test's sums
+    child = apart.Apart("time", "sleep", 2.0)
+    assert child.running()
+    before = status_mb("RssAnon")
+    block = np.ones(40 << 17)  # 40 MB, touched
+    child.held()
+    assert child.running()  # the caller's work came while the child slept
+    assert child.result() is None and not child.running()
+    assert apart.together_mb() >= before + 0.9 * block.nbytes / 2**20
+    del block
+
+
+def test_a_child_stopped_gives_no_answer():
+    from armtrack_cli.pipeline import apart
+
+    child = apart.Apart("time", "sleep", 30.0)
+    child.stop()
+    assert not child.running()
+    with pytest.raises(RuntimeError, match="no answer"):
+        child.result()
+
+
+def test_a_watched_child_counts_the_callers_peak_between_its_own_looks(monkeypatch):
+    """With watch, memory the caller held for a moment while the child ran (and let go
+    before result) counts in together_mb."""
+    import time
+
+    import numpy as np
+
+    from armtrack_cli.pipeline import apart
+
+    monkeypatch.setattr(apart, "_TOGETHER", [0.0])  # not an earlier test's sums
+    child = apart.Apart("time", "sleep", 1.5, watch=True)
+    before = status_mb("RssAnon")
+    block = np.ones(40 << 17)  # 40 MB, touched, then freed (its own mapping: unmapped)
+    time.sleep(0.3)
+    nbytes = block.nbytes
+    del block
+    assert child.result() is None
+    assert apart.together_mb() >= before + 0.9 * nbytes / 2**20
