@@ -10,7 +10,7 @@ import pytest
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.fuse import arm_smoother, imu_fold, models
+from armtrack_cli.fuse import arm_smoother, arm_state, imu_fold, models
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_kernel import smooth
 
@@ -187,7 +187,7 @@ def test_process_is_gauss_markov_with_the_stated_spread():
     t, q, f = _imu(np.random.default_rng(6))
     fd = imu_fold.fold(t, q, f, np.arange(0.1, 2.9, 1 / 30))
     S0 = np.array([0.1, 0.2, 0.3])
-    F, b, Q = arm_smoother.process(fd, s, S0, 0.01)
+    F, b, Q = arm_state.process(fd, s, S0, 0.01)
     var = np.diag(np.deg2rad([0.8, 0.8, 1.2]) ** 2)
     k = 5
     assert np.allclose(F[k, 6:9, 6:9] @ var @ F[k, 6:9, 6:9].T + Q[k, 6:9, 6:9], var,
@@ -207,7 +207,7 @@ def _process_by_blocks(fd, s, shoulder, period, track, camera):
     """F, b, Q as the docstring's blocks say, each written whole: dt·I, [s]× (imu_fold.skew),
     the walks' q·dt³/3·I …: the reference process() is held to bit for bit."""
     n = fd.dt.size
-    d = arm_smoother.state_size(track is not None, camera, shoulder is not None)
+    d = arm_state.state_size(track is not None, camera, shoulder is not None)
     dt, eye = fd.dt[:, None, None], np.eye(3)
     P, V, T, A, G = (slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12), slice(12, 15))
     F, b, Q = np.tile(np.eye(d), (n, 1, 1)), np.zeros((n, d)), np.zeros((n, d, d))
@@ -224,10 +224,10 @@ def _process_by_blocks(fd, s, shoulder, period, track, camera):
     else:
         phi = np.exp(-dt / s.orientation_tau_s)
         F[:, T, T] = phi * eye
-        Q[:, T, T] = arm_smoother.orientation_var(s) * (1 - phi**2)
+        Q[:, T, T] = arm_state.orientation_var(s) * (1 - phi**2)
     Q[:, A, A] = s.accel_bias_walk**2 * dt * eye
     if shoulder is not None:
-        Q[:, d - 4:, d - 4:] = arm_smoother.drift_noise(fd.dt, s)
+        Q[:, d - 4:, d - 4:] = arm_state.drift_noise(fd.dt, s)
     return F, b, Q
 
 
@@ -244,10 +244,10 @@ def test_process_writes_the_blocks_to_the_bit(gyro, drifting, camera):
     track = imu_fold.orientation_track(t, q_hat, w_B, tf) if gyro else None
     S0 = np.array([0.1, 0.2, 0.3]) if drifting else None
     s = FuseSettings()
-    got = arm_smoother.process(fd, s, S0, 0.01, track, camera)
+    got = arm_state.process(fd, s, S0, 0.01, track, camera)
     ref = _process_by_blocks(fd, s, S0, 0.01, track, camera)
     assert all(g.tobytes() == r.tobytes() for g, r in zip(got, ref))
-    bare = arm_smoother.process(fd, s, S0, 0.01, track, camera, noise=False)
+    bare = arm_state.process(fd, s, S0, 0.01, track, camera, noise=False)
     assert len(bare) == 2 and all(g.tobytes() == r.tobytes() for g, r in zip(bare, ref))
 
 
@@ -278,7 +278,7 @@ def test_orientation_track_follows_a_known_error_and_bias():
     tf = np.arange(0.05, 5.9, 1 / 30)
     track = imu_fold.orientation_track(t, q_hat, w_B, tf)
     fd = imu_fold.fold(t, q_hat, np.tile([0, 0, 9.81], (t.size, 1)), tf)
-    F, b, Q = arm_smoother.process(fd, FuseSettings(), None, 0.01, track)
+    F, b, Q = arm_state.process(fd, FuseSettings(), None, 0.01, track)
     assert F.shape[1:] == (15, 15)
     th_f = np.stack([np.interp(tf, t, th[:, i]) for i in range(3)], -1)
     x = np.zeros(15)

@@ -10,7 +10,7 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.fuse import arm_smoother, camera_pose, models
+from armtrack_cli.fuse import arm_smoother, arm_state, camera_pose, models
 from armtrack_cli.vision.charuco import B_TO_W, make_board
 
 
@@ -75,12 +75,12 @@ def test_camera_rows_with_the_pose_correction_match_finite_differences():
     proj = _camera()
     arm = models.Arm(shoulder=np.array([0.15, 0.6, 0.33]), L1=0.3, L2=0.26,
                      forearm_B=np.array([0.0, 1.0, 0.0]))
-    n, d = 4, 15 + camera_pose.POSE + arm_smoother.DRIFT  # (p, v, δθ, b_a, b_g, c, ℓ, S)
-    cs = arm_smoother.camera_slice(d, True)
+    n, d = 4, 15 + camera_pose.POSE + arm_state.DRIFT  # (p, v, δθ, b_a, b_g, c, ℓ, S)
+    cs = arm_state.camera_slice(d, True)
     X = np.zeros((n, d))
     X[:, :3] = [0.15, 0.3, 0.15] + 0.03 * rng.standard_normal((n, 3))
     X[:, cs] = np.r_[np.deg2rad([0.4, -0.3, 0.1]), [0.005, -0.004, 0.002]]  # static
-    X[:, arm_smoother.shoulder_slice(d)] = arm.shoulder
+    X[:, arm_state.shoulder_slice(d)] = arm.shoulder
     q = quat.normalize(rng.standard_normal((n, 4)))
     z = proj(X[:, :3]) + 1.0
     Hc, zc, _, _ = arm_smoother.linearise(X, z, q, proj, arm, None, camera=True)

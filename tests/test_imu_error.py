@@ -13,7 +13,7 @@ import pytest
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.fuse import imu_error, models
+from armtrack_cli.fuse import arm_state, imu_error, models
 from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.methods import Inputs
 from armtrack_cli.fuse.settings import LINEARISATIONS, FuseSettings
@@ -187,7 +187,7 @@ def test_iterated_pass_is_the_fixed_point_of_the_passes():
     imu, seen = inp.imu, np.isfinite(inp.z).all(axis=1)
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, inp.t, hold=s.imu_hold)
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, inp.t)
-    F, b, Q = arm_smoother.process(fd, s, None, 0.01, track)
+    F, b, Q = arm_state.process(fd, s, None, 0.01, track)
     m0, Pm0 = arm_smoother.prior(x0, P0, s, None, True)
     infl = np.r_[np.full(3, s.reacquire_sigma_m**2), np.full(3, s.init_vel_sigma_m_s**2),
                  np.zeros(m0.size - 6)]

@@ -11,7 +11,7 @@ import pytest
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.streams import CameraModel
-from armtrack_cli.fuse import arm_smoother, imu_fold, models, rest, smoother_blocks
+from armtrack_cli.fuse import arm_smoother, arm_state, imu_fold, models, rest, smoother_blocks
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_blocks import smooth_blocked
 from armtrack_cli.fuse.smoother_kernel import smooth
@@ -72,7 +72,7 @@ def test_blocks_equal_the_plain_pass_on_a_session_model():
     s = FuseSettings()
     fd = imu_fold.fold(t, q, f, tf, hold=s.imu_hold)
     track = imu_fold.orientation_track(t, q, w, tf)
-    F, b, Q = arm_smoother.process(fd, s, None, 0.01, track)
+    F, b, Q = arm_state.process(fd, s, None, 0.01, track)
     cam = models.Projection(_camera())
     arm = models.Arm(shoulder=np.array([0.1, 0.5, 0.3]), L1=0.3, L2=0.27,
                      forearm_B=np.array([0.0, 1.0, 0.0]))
@@ -121,7 +121,7 @@ def _plain_run(imu, tf, z, q_hat, first, x0, P0, cam, s, arm):
     m_pre, tf, z, q_hat, first = arm_smoother.pre_roll(imu, tf, z, q_hat, first, s)
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, tf, hold=s.imu_hold)
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, tf)
-    F, b, Q = arm_smoother.process(fd, s, None, float(np.median(np.diff(imu.t))), track)
+    F, b, Q = arm_state.process(fd, s, None, float(np.median(np.diff(imu.t))), track)
     m0, Pm0 = arm_smoother.prior(x0, P0, s, None, True)
     X = np.zeros((tf.size, m0.size))
     X[:, :6] = first

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armtrack_cli.fuse import arm_smoother, imu_fold
+from armtrack_cli.fuse import arm_smoother, arm_state, imu_fold
 from armtrack_cli.fuse.models import Arm, Projection
 from armtrack_cli.fuse.settings import FuseSettings
 from armtrack_cli.fuse.smoother_kernel import smooth
@@ -63,7 +63,7 @@ def model(imu: arm_smoother.ImuSamples, t_frames: np.ndarray, x0: np.ndarray, P0
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
     gyro = s.orientation_model == "gyro" and imu.gyro()
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
-    F, b, Q = arm_smoother.process(fd, s, None, float(np.median(np.diff(imu.t))), track)
+    F, b, Q = arm_state.process(fd, s, None, float(np.median(np.diff(imu.t))), track)
     m0, Pm0 = arm_smoother.prior(x0, P0, s, None, gyro)
     return Model(F, b, Q, m0, Pm0)
 

@@ -10,7 +10,7 @@ The offline arm smoother (fuse/arm_smoother.py) estimates δθ, b_a (and the gyr
 δθ's changes measured by the gyroscope) from every detection and the arm constraint (eq. 15).
 Its *forward* Kalman pass alone is causal: the filtered state at frame k uses the IMU and the
 detections up to k only. Here that pass runs by itself, with the same process rows
-(arm_smoother.process) and the same camera (eq. 7) and arm (eq. 15) rows as
+(arm_state.process) and the same camera (eq. 7) and arm (eq. 15) rows as
 arm_smoother.linearise, gated and re-acquired as fuse/robust.py says. ``corrected`` then adds
 [s]× δθ − R̂ b_a, with the filtered δθ, b_a of frame k−1, to the step into frame k: the
 particle filter runs on it forward, as online the two would side by side, and is given the
@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse import arm_smoother, imu_fold
+from armtrack_cli.fuse import arm_smoother, arm_state, imu_fold
 from armtrack_cli.fuse.methods import camera_arrays
 from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.pf_guard_kernel import _gate_code
@@ -182,7 +182,7 @@ def causal_errors(inp, first: np.ndarray | None, x0: np.ndarray, P0: np.ndarray,
     fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t, hold=s.imu_hold)
     gyro = s.orientation_model == "gyro" and imu.gyro()
     track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t) if gyro else None
-    F, b, Q = arm_smoother.process(fd, s, None, float(np.median(np.diff(imu.t))), track)
+    F, b, Q = arm_state.process(fd, s, None, float(np.median(np.diff(imu.t))), track)
     m0, Pm0 = arm_smoother.prior(x0, P0, s, None, gyro)
     infl = np.zeros(m0.size)
     infl[:6] = np.r_[np.full(3, s.reacquire_sigma_m**2), np.full(3, s.init_vel_sigma_m_s**2)]

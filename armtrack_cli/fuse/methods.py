@@ -13,7 +13,7 @@ import numpy as np
 from armtrack_cli.filters import gaussian
 from armtrack_cli.filters.particles import ess, gaussian_cloud, moments, resample_below, weights
 from armtrack_cli.filters.resampling import scheme
-from armtrack_cli.fuse import arm_smoother, imu_bias, robust
+from armtrack_cli.fuse import arm_smoother, arm_state, imu_bias, robust
 from armtrack_cli.fuse.estimates import Estimates, Inputs
 from armtrack_cli.fuse.models import Arm, Projection, Steps
 from armtrack_cli.fuse.settings import FuseSettings
@@ -338,11 +338,11 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
                                       np.degrees(r.x[-1, arm_smoother.BG])]
     summary["orientation_error_model"] = "gyro" if r.gyro else "gauss-markov"
     if s.shoulder == "drifting":
-        sh = r.x[:, arm_smoother.shoulder_slice(r.x.shape[1])]
+        sh = r.x[:, arm_state.shoulder_slice(r.x.shape[1])]
         summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
         summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
             sh - arm.shoulder, axis=1).max()), 4)
-        ell = r.x[:, arm_smoother.drift_slice(r.x.shape[1]).start]
+        ell = r.x[:, arm_state.drift_slice(r.x.shape[1]).start]
         summary["upper_arm_change_m"] = [round(float(v), 4) for v in (ell.min(), ell.max())]
     if at_rest is not None:
         summary["frames_at_rest"] = at_rest
