@@ -11,9 +11,7 @@
     report(SESSION…)     report/           the clinician PDF -> report.pdf (several sessions of
                                            one subject: their progress)
     run(SESSION)         (this package)    every stage above, in order, each only when its
-                                           inputs are newer than its outputs (detect in a
-                                           child process, fuse's and compare's reading of
-                                           the IMU and truth beside it: ahead.py)
+                                           inputs are newer than its outputs
     run_many(FOLDERS)    (this package)    run over many sessions, on Dask when asked -> cohort.csv
     export(SESSION)      session/export/   trajectories and truth for other tools (TUM, CSV, C3D)
     simulate(OUT)        simulate/         sessions with exact truth, for tests and lab checks

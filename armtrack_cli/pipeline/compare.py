@@ -3,12 +3,9 @@
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
 from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_markers
@@ -38,38 +35,18 @@ CHECK_SEARCH_S = 1.0  # a declared offset is checked within ±1 s of itself
 SYNC_PREFERENCE = ("arm-smoother", "pf-constraint", "ukf", "pf", "ekf", "inertial")  # best-tracking first
 
 
-@dataclass(frozen=True)
-class TruthRead:
-    """The ground truth as compare takes it before any trajectory is read: its joints on
-    their own clock (offset 0) and each joint's markers denoised for the measures (at their
-    own rate: the offset does not change them). What `armtrack run` reads while detect runs
-    (pipeline/ahead.py); what compare makes itself otherwise."""
-
-    raw: Truth
-    denoised: dict[str, np.ndarray]  # joint -> (M, 3) m
-
-
-def read_truth_part(session: Session) -> TruthRead:
-    """compare's part that needs no trajectory (arm sessions)."""
-    require(session, "groundtruth")
-    raw = read_truth(session, offset_s=0.0)
-    return TruthRead(raw, {j: denoised(Truth(raw.t, {j: x}, raw.rate_hz), DEFAULT.lowpass_hz).xyz[j]
-                           for j, x in raw.xyz.items()})
-
-
-def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool = False,
-                       raw: Truth | None = None) -> tuple[Truth, Then | Done]:
+def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool = False
+                       ) -> tuple[Truth, Then | Done]:
     """The truth on the session clock, and how its offset was set (its ``result()``: a dict):
     declared (and checked against the data: a disagreement beyond 3 SD is a one-line warning)
     or "auto" (estimated from the trajectory of the best method in ``trajs``, method ->
     trajectory table; with the camera's centre ``eye`` (3,) m in W, from the residual across
     the camera's rays). With ``beside``, a declared offset's check (which cannot move the
     truth, only warn) runs on a second thread while the caller scores (core/threads.py); its
-    warning comes with ``result()``, on the caller's thread. ``raw``: the truth on its own
-    clock (read_truth_part's), else read here."""
+    warning comes with ``result()``, on the caller's thread."""
     gt = session.groundtruth
     declared = session.sync.groundtruth_offset_s != "auto"
-    raw = read_truth(session, offset_s=0.0) if raw is None else raw
+    raw = read_truth(session, offset_s=0.0)
     ref = next((m for m in SYNC_PREFERENCE if m in trajs), next(iter(trajs)))
     traj = trajs[ref]
     joint = "wrist" if "wrist" in raw.xyz else next(iter(raw.xyz))
@@ -121,12 +98,11 @@ def _camera_centre(work: Path):
         return None
 
 
-def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth,
-            smooth: dict | None = None) -> tuple[list, list, dict]:
+def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
+            ) -> tuple[list, list, dict]:
     """errors.csv's rows, measures.csv's rows and the frames without truth, of every method
     in ``trajs`` against ``truth`` (on the session clock), whose markers are taken out of it
-    as they are used (truth.xyz is left empty); ``smooth``: the markers denoised beforehand
-    (read_truth_part's), else denoised here."""
+    as they are used (truth.xyz is left empty)."""
     rows, mrows, excluded = [], [], {}
     for m, traj in trajs.items():
         t = traj["t"]
@@ -148,8 +124,7 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth,
     for_measures = Truth(t_truth, {}, rate)
     for joint in list(raw):
         one = Truth(t_truth, {joint: raw.pop(joint)}, rate)
-        for_measures.xyz[joint] = (smooth.pop(joint) if smooth is not None else
-                                   denoised(one, DEFAULT.lowpass_hz).xyz[joint])
+        for_measures.xyz.update(denoised(one, DEFAULT.lowpass_hz).xyz)
         del one
     for m, traj in trajs.items():
         mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"),
@@ -159,9 +134,7 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth,
 
 
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
-            out: str | Path | None = None, truth: list | None = None) -> dict[str, Any]:
-    """``truth``: [read_truth_part's result] for this session, read beforehand (`armtrack
-    run`, while detect runs: pipeline/ahead.py), which compare empties; else read here."""
+            out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
     require(session, "groundtruth")
     if session.palm is not None:  # Cordella et al.: pipeline/palm.py
@@ -173,14 +146,10 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
     trajs = {m: trajectory_columns(work / f"trajectory-{m}.csv") for m in methods}
-    ahead = truth.pop() if truth else None
     truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
-                                        beside=True,  # a declared offset's check beside
-                                        raw=ahead.raw if ahead else None)
+                                        beside=True)  # a declared offset's check beside
     try:
-        rows, mrows, excluded = _scored(session, work, trajs, truth,
-                                        ahead.denoised if ahead else None)
-        del ahead
+        rows, mrows, excluded = _scored(session, work, trajs, truth)
     finally:  # the check's estimate (and its warning) before any error of the scoring's
         offset = pending.result()
     with output_set():

@@ -46,39 +46,11 @@ class Prepared:
     #                  arm estimate ([arm] "auto"); None once that is done
 
 
-@dataclass(frozen=True)
-class ImuRead:
-    """The session's IMU as fuse takes it before any detection is read: its usable samples
-    (finite acceleration and orientation), on its own clock, and their orientation with the
-    wandering error made constant (fuse/gyro_orientation.py). What `armtrack run` reads while
-    detect runs (pipeline/ahead.py); what prepare reads itself otherwise."""
-
-    t: np.ndarray  # (M,) s, the IMU's clock
-    quat: np.ndarray  # (M, 4) q_WB as reported
-    acc: np.ndarray  # (M, 3) m/s², f_B
-    gyr: np.ndarray  # (M, 3) rad/s
-    rate_hz: float
-    q_anchored: np.ndarray  # (M, 4)
-
-
-def read_imu_part(session: Session) -> ImuRead:
-    """The IMU's part of prepare: it needs neither the calibration nor the detections."""
-    require(session, "imu")
-    imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
-                   field=session.imu.field)
-    ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
-    ok = slice(None) if ok.all() else ok  # every sample usable: views, not copies
-    t, q_imu, acc, gyr = imu.t[ok], imu.quat[ok], imu.acc[ok], imu.gyr[ok]
-    return ImuRead(t, q_imu, acc, gyr, imu.rate_hz, gyro_anchored(t, q_imu, gyr))
-
-
-def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False,
-            imu: ImuRead | list | None = None) -> Prepared:
+def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False
+            ) -> Prepared:
     """The session's inputs on its clock; with ``beside``, a declared IMU offset's check is
     left to run on a second thread from ``imu_offset.start()``, beside the caller's work
-    (pipeline/imu_offset.py); ``imu_offset.result()`` waits for it. ``imu``: read_imu_part's
-    result, read beforehand (or [it]: emptied, so that the caller holds it no more), else
-    read here."""
+    (pipeline/imu_offset.py); ``imu_offset.result()`` waits for it."""
     from armtrack_cli.session.tables import read_patch_detections
 
     require(session, "imu")
@@ -90,9 +62,11 @@ def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = Fal
                         f"video is {video.width}x{video.height}", "rerun `armtrack calibrate`")
     t_f, uv = read_patch_detections(dest / "detections.csv", width=cam.width, height=cam.height,
                                     n_frames=video.n_frames)
-    imu = imu.pop() if isinstance(imu, list) else imu
-    imu = read_imu_part(session) if imu is None else imu
-    q_imu, q_anch = imu.quat, imu.q_anchored
+    imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
+                   field=session.imu.field)
+    ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)
+    ok = slice(None) if ok.all() else ok  # every sample usable: views, not copies
+    q_imu = imu.quat[ok]
     arm = None
     if session.arm is not None:
         arm = models.Arm(shoulder=session.arm.shoulder_m, L1=session.arm.upper_arm_m,
@@ -100,11 +74,12 @@ def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = Fal
     proj = models.Projection(cam)
     proj.pose_cov = camera_pose.board_prior(proj, session.camera.board)  # its own uncertainty
     known = arm if session.arm is None or not session.arm.auto else None  # "auto": not yet
-    offset, how = resolve_imu_offset(session, session.imu.file, imu.t, q_anch,
-                                     models.accel_world(q_anch, imu.acc), t_f, uv, proj, known,
+    q_anch = gyro_anchored(imu.t[ok], q_imu, imu.gyr[ok])
+    offset, how = resolve_imu_offset(session, session.imu.file, imu.t[ok], q_anch,
+                                     models.accel_world(q_anch, imu.acc[ok]), t_f, uv, proj, known,
                                      beside=beside)
-    t_imu = imu.t + offset  # session time = stream time + offset
-    a_w = models.accel_world(q_imu, imu.acc)  # Tao & Hu eq. 4; after the offset check,
+    t_imu = imu.t[ok] + offset  # session time = stream time + offset
+    a_w = models.accel_world(q_imu, imu.acc[ok])  # Tao & Hu eq. 4; after the offset check,
     #                                               whose own arrays peak (issue 15)
     # frames inside the IMU's span, starting at the first detection
     inside = (t_f >= t_imu[0]) & (t_f <= t_imu[-1])
@@ -116,7 +91,7 @@ def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = Fal
     steps = models.composite_steps(t_imu, a_w, t_f[frames], accel_noise=s.accel_noise,
                                    imu_period=1.0 / imu.rate_hz)
     inputs = Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu, t_f[frames]),
-                    t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc, imu.gyr))
+                    t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc[ok], imu.gyr[ok]))
     return Prepared(t_f, frames, inputs, proj, arm, how, q_anch)
 
 
@@ -139,9 +114,7 @@ def _initial_state(session: Session, p: Prepared, s) -> tuple[np.ndarray, np.nda
 
 def fuse(path: str | Path, *, method: str | None = None, particles: int | None = None,
          seed: int | None = None, recipe: str | None = None, sets: tuple[str, ...] = (),
-         out: str | Path | None = None, imu: list | None = None) -> dict[str, Any]:
-    """``imu``: [read_imu_part's result] for this session, read beforehand (`armtrack run`,
-    while detect runs: pipeline/ahead.py), which prepare empties; else read here."""
+         out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
     s, where = settings_for(recipe, sets, method=method, particles=particles, seed=seed,
                             kind=session.kind)
@@ -155,7 +128,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         raise ConfigError(session.toml_path, f"has no [arm] section, which {s.method} needs",
                           "use inertial, ekf, ukf or pf, or add the arm model")
     dest = out_dir(session, out)
-    p = prepare(session, dest, s, beside=True, imu=imu)  # the offset's check: started below
+    p = prepare(session, dest, s, beside=True)  # the offset's check: started below
     auto = None
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
         from armtrack_cli.pipeline import arm_model

@@ -4,10 +4,8 @@ A recipe file counts as an input of the stages that read it; --set values always
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -16,8 +14,7 @@ from armtrack_cli.core.errors import ConfigError
 from armtrack_cli.core.methods import BUILT, METHODS, PALM_METHODS
 from armtrack_cli.detect.palm_blobs import PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings
-from armtrack_cli.pipeline.ahead import Ahead, read_ahead
-from armtrack_cli.pipeline.apart import Apart
+from armtrack_cli.pipeline.apart import call_apart
 from armtrack_cli.pipeline.calibrate import calibrate
 from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe, settings_for
 from armtrack_cli.session.config import Session, load_session
@@ -48,11 +45,8 @@ def _methods(session: Session, methods, recipe, sets) -> tuple[str, ...]:
 
 
 def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe, sets,
-         seed: int | None, ahead: Callable[..., Ahead] | None = None) -> list[Step]:
-    """The steps for this session, in order; a stage whose section is absent is left out.
-    ``ahead(beside=child)``: what to read while detect's child runs (read_ahead), fuse and compare
-    taking it from there; None: nothing (each stage reads its own)."""
-    done = Ahead()  # what detect's step read beside it
+         seed: int | None) -> list[Step]:
+    """The steps for this session, in order; a stage whose section is absent is left out."""
     cam = session.camera
     toml, rec = session.toml_path, recipe_file(recipe)
     video = cam.video if cam is not None else None
@@ -62,23 +56,22 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
                   lambda: calibrate(session.root, out=work.path, recipe=recipe, sets=sets), True),
              Step("detect", (toml, video), ("detections.csv",),  # in a process of its own:
                   # its kernels and decoder do not stay for fuse (pipeline/apart.py)
-                  lambda: _detect(session, work, recipe, sets, ahead, done), True)]
+                  lambda: call_apart("armtrack_cli.pipeline.detect", "detect", session.root,
+                                     out=work.path, recipe=recipe, sets=sets), True)]
     for m in methods:
         reads = (work / "palm.toml",) if m in PALM_METHODS else (
             session.imu.file if session.imu is not None else None,)
         steps.append(Step(f"fuse {m}", (toml, *reads, work / "camera.yaml", work / "detections.csv"),
                           (f"trajectory-{m}.csv", f"kinematics-{m}.csv"),
                           lambda m=m: _stage("fuse")(session.root, method=m, seed=seed,
-                                                     recipe=recipe, sets=sets, out=work.path,
-                                                     imu=None if m in PALM_METHODS
-                                                     else done.take_imu()),
+                                                     recipe=recipe, sets=sets, out=work.path),
                           True))
     if session.groundtruth is not None and methods:
         traj = tuple(work / f"{k}-{m}.csv" for m in methods for k in ("trajectory", "kinematics"))
         steps.append(Step("compare", (toml, session.groundtruth.file, *traj),
                           ("errors.csv", "measures.csv"),
                           lambda: _stage("compare")(session.root, methods=methods,
-                                                    out=work.path, truth=done.take_truth())))
+                                                    out=work.path)))
     made = tuple(work / n for st in steps[2:] for n in st.outputs)  # fuse's and compare's
     steps.append(Step("report", (toml, *made), ("report.pdf",),
                       lambda: _report([(session.root, work.path)])))
@@ -86,30 +79,10 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
                                                     s.settings) for s in steps]
 
 
-def _detect(session: Session, work: WorkFolder, recipe, sets, ahead, done: Ahead
-            ) -> dict[str, Any]:
-    """detect in a child process; meanwhile ``ahead(beside=child)`` (if given) in this one, its
-    results put in ``done`` for fuse and compare. The result's ``read_ahead``: how long the
-    reading took and how long detect ran on after it (s; 0: the reading outlasted detect)."""
-    child = Apart("armtrack_cli.pipeline.detect", "detect", session.root, out=work.path,
-                  recipe=recipe, sets=sets, watch=ahead is not None)
-    if ahead is None:
-        return child.result()
-    try:
-        got = ahead(beside=child)
-    except BaseException:
-        child.stop()
-        raise
-    t = time.perf_counter()
-    result = child.result()
-    done.imu, done.truth = got.imu, got.truth
-    return {**result, "read_ahead": {"seconds": round(got.seconds, 3),
-                                     "detect_after_s": round(time.perf_counter() - t, 3)}}
-
-
 def _stage(name: str) -> Callable[..., dict[str, Any]]:
-    """fuse or compare, imported when its step runs (already, where detect's step read ahead
-    for them: pipeline/ahead.py)."""
+    """fuse or compare, imported when its step runs: numba and scipy are not in this process
+    while detect runs beside it in its own (pipeline/apart.py; about 25 MB of anonymous
+    memory held meanwhile, issue 15)."""
     import importlib
 
     return getattr(importlib.import_module(f"armtrack_cli.pipeline.{name}"), name)
@@ -150,12 +123,8 @@ def run(session: str | Path, *, through: str = "report", methods: tuple[str, ...
     chosen = _methods(s, methods, recipe, sets)
     last = STAGES.index(through)
     stages, results = {}, {}
-    built = tuple(m for m in chosen if m in BUILT)
-    ahead = None  # fuse runs after detect in this call: its part (and compare's) beside detect
-    if last >= STAGES.index("fuse") and built:
-        ahead = partial(read_ahead, s, built, compare=last >= STAGES.index("compare"))
-    for step in plan(s, work, methods=built, recipe=recipe, sets=sets, seed=seed,
-                     ahead=ahead):
+    for step in plan(s, work, methods=tuple(m for m in chosen if m in BUILT), recipe=recipe,
+                     sets=sets, seed=seed):
         if STAGES.index(step.name.split()[0]) > last:
             break
         if _stale(step, work, force=force, sets=sets):
