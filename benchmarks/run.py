@@ -272,13 +272,13 @@ def stage(code: str, env: dict | None = None) -> tuple[float, float, str]:
 
     # VmHWM: this process's peak resident memory (ru_maxrss would carry the parent's peak
     # across the exec), or, where a stage ran apart (pipeline/apart.py: `armtrack run`
-    # detects in a child), its memory and the child's at once, whichever is higher
-    # the stage's own imports only (armtrack_cli.pipeline loads each stage on first use)
-    prog = ("import re, sys, time; from armtrack_cli import pipeline; "
+    # detects in a child), its memory and the child's at once, whichever is higher; the
+    # stage's own imports only (armtrack_cli.pipeline loads each stage on first use)
+    prog = ("import sys, time; from armtrack_cli import pipeline; "
             "from armtrack_cli.pipeline.apart import together_mb; "
-            "t = time.perf_counter(); " + code + "; print(time.perf_counter() - t, max(int("
-            "re.search(r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read()).group(1)) "
-            "/ 1024, together_mb()))")
+            "from armtrack_cli.session.proc_status import status_mb; "
+            "t = time.perf_counter(); " + code + "; print(time.perf_counter() - t, "
+            "max(status_mb('VmHWM'), together_mb()))")
     r = subprocess.run([sys.executable, "-c", prog], capture_output=True, text=True,
                        cwd=REPO, env=_ENV if env is None else env)
     if r.returncode:  # reported in the table, not fatal

@@ -4,9 +4,10 @@ The smoother takes each frame's detection as an independent measurement of π(p)
 ``pixel_sigma``. Where the patch is still in the image that is not so: the video codec
 (MPEG-4's motion-compensated blocks) carries a still patch's pixels, and with them the
 centroid's error, from frame to frame. On simulated sessions (validation/detect_correlation.py,
-docs/validation-from-mocap.md) detect's error has a lag-1 autocorrelation of 0.8 and an
-integrated autocorrelation time τ of 6-15 frames where the patch moves less than 0.5 px a
-frame, and 0.1-0.2 (τ 1-2) where it moves faster; the error's size (RMS) is the same in both.
+docs/validation-from-mocap.md) detect's error has a lag-1 autocorrelation of 0.74-0.81 and an
+integrated autocorrelation time τ of 12-16 frames (UE-ADL sessions; 5-25 on the validation
+tasks) where the patch moves less than 0.5 px a frame, and 0.1-0.2 (τ 2-7) where it moves
+faster; the error's size (RMS) is the same in both.
 n frames of an error correlated over τ frames tell its mean as well as n / τ independent ones
 (the variance of a correlated series' mean, e.g. Geyer 1992, "Practical Markov chain Monte
 Carlo", Statist. Sci. 7(4)), so rows of the per-frame SD pin a still patch's position τ times
