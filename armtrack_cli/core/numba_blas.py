@@ -11,12 +11,12 @@ scipy.linalg, whose array-API layer copies numpy's namespace and so imports nump
 ``preload()`` finds the two extension modules as the import system would (its own path
 finder, in scipy's linalg folder) and loads them under their own names into sys.modules,
 without their package's ``__init__``: numba's import, and its run-time look-up of each
-routine's address, find them there. Nothing else changes: a later ``import scipy.linalg`` runs the package as usual, and its Cython modules
-link against these same two (``from scipy.linalg import cython_blas`` finds them too; only
-the package's attribute ``scipy.linalg.cython_blas`` is then not set). Where scipy.linalg is
-already imported, or a module is not where scipy keeps it, it does nothing and numba imports
-the package as before. Callers: fuse/kernel_setup.py and pipeline/detect.py, before their
-first kernel.
+routine's address, find them there. Nothing else changes: a later ``import scipy.linalg``
+runs the package as usual, and its Cython modules link against these same two (``from
+scipy.linalg import cython_blas`` finds them too; only the package's attribute
+``scipy.linalg.cython_blas`` is then not set). Where scipy.linalg is already imported, or a
+module is not where scipy keeps it, it does nothing and numba imports the package as before.
+Callers: fuse/kernel_setup.py and pipeline/detect.py, before their first kernel.
 """
 
 from __future__ import annotations
