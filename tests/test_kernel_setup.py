@@ -54,3 +54,46 @@ def test_branch_repairs_path_kernel_loads_with_the_repairs_types(monkeypatch):
     branch_repair.window_path(lambda lo, hi: (F[lo:hi], rng.normal(size=(hi - lo, 15))),
                               0, 30, rng.normal(size=15), block=8)
     assert len(seen["load"]) == 1 and seen["load"] == seen["run"]
+
+
+_BLAS_CHILD = """
+import sys
+import numpy as np
+from armtrack_cli.fuse.kernel_setup import load_kernels
+from armtrack_cli.fuse.methods import run_gaussian
+from armtrack_cli.fuse.settings import FuseSettings
+from tests.test_fuse_filters import _camera_problem
+
+load_kernels("ekf")  # numba's registries, and the EKF kernel, whose products call BLAS
+first = "scipy.linalg" in sys.modules
+inp, x0, P0, proj, _ = _camera_problem()
+s = FuseSettings(method="ekf")
+a = run_gaussian(inp, x0, P0, proj, s, "ekf", compiled=True)
+during = "scipy.linalg" in sys.modules
+b = run_gaussian(inp, x0, P0, proj, s, "ekf", compiled=False)
+import scipy.linalg
+from scipy.linalg import cython_blas
+same = cython_blas is sys.modules["scipy.linalg.cython_blas"]
+solved = scipy.linalg.solve(np.array([[4.0, 1.0], [1.0, 3.0]]), np.array([1.0, 2.0]))
+print(first, during, same, float(np.max(np.abs(a.mean - b.mean)) / np.abs(b.mean).max()),
+      float(np.max(np.abs(a.cov - b.cov)) / np.abs(b.cov).max()), *solved.tolist())
+"""
+
+
+def test_kernels_load_without_the_scipy_linalg_package():
+    """core/numba_blas.py: in a fresh process, load_kernels leaves the scipy.linalg package
+    unimported (numba's BLAS check imports it otherwise), the compiled EKF, whose matrix
+    products go through the preloaded cython_blas, still equals the numpy reference (1e-12),
+    and scipy.linalg imported afterwards links to the same module and solves correctly."""
+    import subprocess
+    import sys
+
+    from tests.conftest import REPO
+
+    out = subprocess.run([sys.executable, "-c", _BLAS_CHILD], capture_output=True, text=True,
+                         cwd=REPO, check=True).stdout.split()
+    first, during, same = out[:3]
+    mean_err, cov_err, x, y = map(float, out[3:])
+    assert (first, during, same) == ("False", "False", "True")
+    assert mean_err < 1e-12 and cov_err < 1e-12
+    np.testing.assert_allclose([x, y], [1.0 / 11.0, 7.0 / 11.0], rtol=1e-14)

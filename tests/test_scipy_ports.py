@@ -2,7 +2,8 @@
 held to scipy's own functions, the independent reference: the zero-phase Butterworth
 (core/butter.py) to round-off, PCHIP (measures/pchip.py), find_peaks (measures/peaks.py) and
 the bounded scalar minimum (core/bounded_min.py) exactly; and Winter's residual analysis with
-its early stop (compare/residual.py) against the whole-grid form it replaced."""
+its early stop (compare/residual.py), a column at a time or a marker's columns side by side,
+against the whole-grid form it replaced."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from scipy.interpolate import PchipInterpolator
 from scipy.optimize import minimize_scalar
 from scipy.signal import butter, find_peaks, sosfiltfilt
 
-from armtrack_cli.compare.residual import MIN_HZ, winter_lowpass
+from armtrack_cli.compare.residual import MIN_HZ, winter_lowpass, winter_lowpass_columns
 from armtrack_cli.core.bounded_min import bounded_min
 from armtrack_cli.core.butter import butter_sections, fast_len, zero_phase
 from armtrack_cli.measures import peaks
@@ -119,6 +120,27 @@ def test_winter_cutoff_and_its_filtered_copy_are_the_whole_grids(speed_hz):
     fc_ref, y_ref = _winter_whole_grid(x, 100.0, 6.0)
     assert fc == fc_ref
     assert np.abs(y - y_ref).max() < 1e-12
+
+
+def test_winter_columns_are_each_columns_own_whole_grid():
+    """A marker's coordinates side by side (compare/score.py), each filter's spectrum shared:
+    each column's cut-off and filtered copy are the whole grid's with scipy (1e-12), and
+    bit for bit what the column gets alone; a column that stops early, one that never reaches
+    its noise level (max_hz) and one whose noise fit fails (a straight line: max_hz)."""
+    rng = np.random.default_rng(8)
+    t = np.arange(0, 8, 0.01)
+    X = np.stack([0.2 * np.sin(2 * np.pi * 0.1 * t) + 3e-4 * rng.standard_normal(t.size),
+                  0.2 * np.sin(2 * np.pi * 2.0 * t) + 3e-4 * rng.standard_normal(t.size),
+                  0.05 * rng.standard_normal(t.size), 0.3 + 0.01 * t], axis=1)
+    got = winter_lowpass_columns(X, 100.0, max_hz=6.0)
+    assert len({fc for fc, _ in got}) >= 2
+    assert got[-1][0] == 6.0
+    for j, (fc, y) in enumerate(got):
+        fc_ref, y_ref = _winter_whole_grid(X[:, j], 100.0, 6.0)
+        assert fc == fc_ref, j
+        assert np.abs(y - y_ref).max() < 1e-12
+        alone = winter_lowpass_columns(X[:, j:j + 1], 100.0, max_hz=6.0)[0]
+        assert alone[0] == fc and np.array_equal(alone[1], y)
 
 
 def test_prominences_of_a_long_signal_are_scipys():

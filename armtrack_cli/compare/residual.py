@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armtrack_cli.core.butter import zero_phase
+from armtrack_cli.core.butter import ZeroPhase, zero_phase
 from armtrack_cli.measures.signal import lowpass
 
 MIN_HZ = 1.0  # the lowest cut-off tried: a marker at rest is not filtered below it
@@ -39,19 +39,42 @@ def winter_cutoff(x: np.ndarray, fs: float, *, max_hz: float) -> float:
 def winter_lowpass(x: np.ndarray, fs: float, *, max_hz: float) -> tuple[float, np.ndarray]:
     """(winter_cutoff's cut-off, x low-passed at it (N,)): the cut-offs of the grid are tried
     in rising order and the first at the noise level ends the search, its filtered copy the
-    result (the transform of x is taken once for all of them: measures.butter)."""
+    result (the transform of x is taken once for all of them: core/butter.py)."""
+    return winter_lowpass_columns(x[:, None], fs, max_hz=max_hz)[0]
+
+
+def winter_lowpass_columns(x: np.ndarray, fs: float, *, max_hz: float
+                           ) -> list[tuple[float, np.ndarray]]:
+    """winter_lowpass of each column of x (N, d), [(cut-off, filtered column (N,))]: the
+    columns side by side through the cut-offs, each filter's spectrum taken once for them
+    all (a column's arithmetic is its own, so its numbers are those it has alone)."""
     nyq = fs / 2.0
-    if x.size < 2 * fs or max_hz <= MIN_HZ or 0.3 * nyq <= max_hz:
-        return max_hz, lowpass(x[:, None], fs, max_hz)[:, 0]
+    d = x.shape[1]
+    if len(x) < 2 * fs or max_hz <= MIN_HZ or 0.3 * nyq <= max_hz:
+        return [(max_hz, lowpass(x[:, j:j + 1], fs, max_hz)[:, 0]) for j in range(d)]
     noise_band = np.linspace(0.3 * nyq, 0.45 * nyq, 8)
     grid = np.arange(MIN_HZ, max_hz + 1e-9, 0.25)
-    runs = zero_phase(x[None], fs, [*noise_band, *grid, max_hz])
-    r_noise = [_rms(x, next(runs)[0]) for _ in noise_band]
-    slope, a = np.polyfit(noise_band, r_noise, 1)
-    if not np.isfinite(a) or a <= 0:
-        return max_hz, lowpass(x[:, None], fs, max_hz)[:, 0]
-    for fc in grid:
-        y = next(runs)[0]
-        if _rms(x, y) <= a:
-            return float(fc), y
-    return max_hz, lowpass(x[:, None], fs, max_hz)[:, 0]
+    cutoffs = [float(f) for f in (*noise_band, *grid, max_hz)]
+    ready = [ZeroPhase(x[None, :, j], fs, cutoffs) for j in range(d)]
+    r_noise = [[] for _ in range(d)]
+    for fc in cutoffs[:len(noise_band)]:
+        power = ready[0].power_at(fc)
+        for j in range(d):
+            r_noise[j].append(_rms(x[:, j], ready[j].at(fc, power)[0]))
+    out: list[tuple[float, np.ndarray] | None] = [None] * d
+    level = {}  # column -> its noise level a, while its search goes on
+    for j in range(d):
+        slope, a = np.polyfit(noise_band, r_noise[j], 1)
+        if np.isfinite(a) and a > 0:
+            level[j] = a
+    for fc in cutoffs[len(noise_band):-1]:  # the grid
+        if not level:
+            break
+        power = ready[0].power_at(fc)
+        for j in list(level):
+            y = ready[j].at(fc, power)[0]
+            if _rms(x[:, j], y) <= level[j]:
+                out[j] = (float(fc), y)
+                del level[j]
+    return [o if o is not None else (max_hz, lowpass(x[:, j:j + 1], fs, max_hz)[:, 0])
+            for j, o in enumerate(out)]

@@ -9,7 +9,8 @@ Each pass is linear: the zero-state response, a convolution with the impulse res
 (truncated where it has decayed below 1e-20 of its start: the filter is stable), plus the
 response to the initial state, C·A^n·s0. Both passes together are one multiplication by
 |H|² in the frequency domain and corrections at the two ends (zero_phase); the FFT of the
-extended signal is taken once for every cut-off.
+extended signal is taken once for every cut-off (ZeroPhase), and a filter's spectrum once for
+every signal of the same length (a marker's coordinates in compare/residual.py).
 """
 
 from __future__ import annotations
@@ -104,40 +105,61 @@ def fast_len(n: int) -> int:
     return best
 
 
-def zero_phase(x: np.ndarray, fs: float, cutoffs: Iterable[float]) -> Iterator[np.ndarray]:
-    """x (S, N) signals (N > PAD, finite); for each cut-off in turn (Hz, below fs/2), the
-    signals low-passed forward and backward: (S, N), scipy.signal.sosfiltfilt's result.
-    Lazy: stop iterating and the remaining cut-offs cost nothing.
+class ZeroPhase:
+    """x (S, N) signals (N > PAD, finite) made ready for zero-phase low-passing at any of
+    ``cutoffs`` (Hz, below fs/2): the odd extension and its transform, taken once.
+    ``at(fc, power)`` gives them low-passed at fc; ``power`` (the filter's |H|² on this
+    transform's bins, ``power_at``) may be shared by other signals of the same length and
+    cut-offs (compare/residual.py: the three coordinates of a marker).
 
     With c = h * ext (the forward pass without its initial state), the backward pass is
     Σ_k h[k] y1[m + k] with y1 = c on [0, ne) plus the initial state's response z1: one
     inverse FFT of ext's transform times |H|² gives it for the whole of c, and two short
     direct sums (length of h) take off c's tail beyond ne and add z1's share."""
-    x = np.atleast_2d(np.asarray(x, float))
-    cutoffs = [float(f) for f in cutoffs]
-    if not cutoffs:
-        return
-    ext = np.concatenate([2 * x[:, :1] - x[:, PAD:0:-1], x,
-                          2 * x[:, -1:] - x[:, -2:-(PAD + 2):-1]], axis=1)  # odd extension
-    ne = ext.shape[1]
-    longest = max(len(_response(f, fs, ne)[0]) for f in cutoffs)
-    nfft = fast_len(ne + longest)
-    E = np.fft.rfft(ext, nfft)
-    for fc in cutoffs:
-        h, R, zi = _response(fc, fs, ne)
+
+    def __init__(self, x: np.ndarray, fs: float, cutoffs: Iterable[float]):
+        x = np.atleast_2d(np.asarray(x, float))
+        self.x, self.fs = x, fs
+        self.ext = np.concatenate([2 * x[:, :1] - x[:, PAD:0:-1], x,
+                                   2 * x[:, -1:] - x[:, -2:-(PAD + 2):-1]], axis=1)  # odd
+        self.ne = ne = self.ext.shape[1]
+        longest = max(len(_response(float(f), fs, ne)[0]) for f in cutoffs)
+        self.nfft = fast_len(ne + longest)
+        self.E = np.fft.rfft(self.ext, self.nfft)
+
+    def power_at(self, fc: float) -> np.ndarray:
+        """|H(fc)|² on the transform's bins."""
+        H = np.fft.rfft(_response(fc, self.fs, self.ne)[0], self.nfft)
+        return H.real**2 + H.imag**2
+
+    def at(self, fc: float, power: np.ndarray | None = None) -> np.ndarray:
+        """(S, N) the signals low-passed forward and backward at fc: scipy's sosfiltfilt."""
+        ext, ne, nfft = self.ext, self.ne, self.nfft
+        h, R, zi = _response(fc, self.fs, ne)
         L = len(h)
-        H = np.fft.rfft(h, nfft)
-        y = np.fft.irfft(E * (H.real**2 + H.imag**2), nfft)[:, :ne]
+        y = np.fft.irfft(self.E * (self.power_at(fc) if power is None else power), nfft)[:, :ne]
         g = h[::-1]
         z1 = (ext[:, :1] * zi) @ R.T  # (S, L): the forward pass's initial-state response
-        for i in range(len(x)):
+        for i in range(len(self.x)):
             if L > 1:  # c beyond ne (it is cut from y1), from ext's last L − 1 samples
                 tail = np.convolve(h, ext[i, ne - L + 1:])[L - 1:2 * L - 2]
                 y[i, ne - L + 1:] -= np.convolve(g, tail)[:L - 1]
             y[i, :L] += np.convolve(g, z1[i])[L - 1:2 * L - 1]
         last = ext[:, ne - L:][:, ::-1] @ h + z1[:, -1] * (L == ne)  # y1[ne − 1]
         y[:, ne - L:] += ((last[:, None] * zi) @ R.T)[:, ::-1]  # backward initial state
-        yield y[:, PAD:ne - PAD]
+        return y[:, PAD:ne - PAD]
+
+
+def zero_phase(x: np.ndarray, fs: float, cutoffs: Iterable[float]) -> Iterator[np.ndarray]:
+    """x (S, N) signals (N > PAD, finite); for each cut-off in turn (Hz, below fs/2), the
+    signals low-passed forward and backward: (S, N), scipy.signal.sosfiltfilt's result
+    (ZeroPhase's). Lazy: stop iterating and the remaining cut-offs cost nothing."""
+    cutoffs = [float(f) for f in cutoffs]
+    if not cutoffs:
+        return
+    ready = ZeroPhase(x, fs, cutoffs)
+    for fc in cutoffs:
+        yield ready.at(fc)
 
 
 def lowpass_columns(x: np.ndarray, fs: float, fc: float) -> np.ndarray:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from armtrack_cli.core.numba_blas import preload
 from armtrack_cli.filters import gaussian
 from armtrack_cli.fuse.methods import guard_args
 from armtrack_cli.fuse.settings import FuseSettings
@@ -17,6 +18,7 @@ def load_kernels(method: str) -> None:
     that a caller timing ``run`` times the filter only."""
     if method not in ("ekf", "ukf", "inertial", "pf", "pf-constraint", "arm-smoother"):
         return
+    preload()  # numba's BLAS without the scipy.linalg package (core/numba_blas.py)
     if method == "arm-smoother":
         _load_smoother_passes()
         method = "pf-constraint"  # its first pass

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from armtrack_cli.core.errors import ConfigError
+from armtrack_cli.core.numba_blas import preload
 from armtrack_cli.detect.palm_blobs import CENTROIDS, PalmBlobDetector, PalmBlobSettings
 from armtrack_cli.detect.patch_tracker import PatchSettings, PatchTracker
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
@@ -36,6 +37,7 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
             raise ConfigError(where, f"[detect.palm] centroid = {settings.centroid!r} is not "
                               "one of " + ", ".join(CENTROIDS))
         setup = time.perf_counter()  # the compiled kernel's one-time set-up: kernel_setup_s
+        preload()  # numba's BLAS without the scipy.linalg package (core/numba_blas.py)
         det = PalmBlobDetector(session.palm.colour.low, session.palm.colour.high, settings)
         det.warm()
         setup = time.perf_counter() - setup
@@ -55,6 +57,7 @@ def detect(path: str | Path, *, out: str | Path | None = None, recipe: str | Non
                               "add patch = { hsv_low = [H, S, V], hsv_high = [H, S, V] }")
         settings = section(doc, "detect.patch", PatchSettings, where)
         setup = time.perf_counter()  # numba's import and the kernel's tables: kernel_setup_s
+        preload()
         tracker = PatchTracker(session.camera.patch.low, session.camera.patch.high, settings,
                                fps=video.fps, frames=video.n_frames)
         setup = time.perf_counter() - setup

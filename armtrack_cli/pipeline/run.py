@@ -32,6 +32,7 @@ class Step:
     outputs: tuple[str, ...]  # in the work folder
     call: Callable[[], dict[str, Any]]
     settings: bool = False  # reads the recipe and --set
+    apart: bool = False  # runs in a child process: nothing of its own to free in this one
 
 
 def _methods(session: Session, methods, recipe, sets) -> tuple[str, ...]:
@@ -57,7 +58,7 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
              Step("detect", (toml, video), ("detections.csv",),  # in a process of its own:
                   # its kernels and decoder do not stay for fuse (pipeline/apart.py)
                   lambda: call_apart("armtrack_cli.pipeline.detect", "detect", session.root,
-                                     out=work.path, recipe=recipe, sets=sets), True)]
+                                     out=work.path, recipe=recipe, sets=sets), True, True)]
     for m in methods:
         reads = (work / "palm.toml",) if m in PALM_METHODS else (
             session.imu.file if session.imu is not None else None,)
@@ -76,7 +77,7 @@ def plan(session: Session, work: WorkFolder, *, methods: tuple[str, ...], recipe
     steps.append(Step("report", (toml, *made), ("report.pdf",),
                       lambda: _report([(session.root, work.path)])))
     return [s if not (s.settings and rec) else Step(s.name, (*s.inputs, rec), s.outputs, s.call,
-                                                    s.settings) for s in steps]
+                                                    s.settings, s.apart) for s in steps]
 
 
 def _stage(name: str) -> Callable[..., dict[str, Any]]:
@@ -130,7 +131,8 @@ def run(session: str | Path, *, through: str = "report", methods: tuple[str, ...
         if _stale(step, work, force=force, sets=sets):
             results[step.name] = step.call()
             stages[step.name] = "ran"
-            release_memory()
+            if not step.apart:  # a full collection costs 40-100 ms with numba's objects
+                release_memory()
         else:
             stages[step.name] = "up to date"
     for m in chosen:
