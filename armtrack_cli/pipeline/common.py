@@ -81,6 +81,6 @@ def large_arrays_mapped() -> None:
     import ctypes
 
     try:
-        ctypes.CDLL(None).mallopt(M_MMAP_THRESHOLD, MAPPED_FROM_MB * 2**20)
+        ctypes.CDLL(None).mallopt(M_MMAP_THRESHOLD, int(MAPPED_FROM_MB * 2**20))
     except (OSError, AttributeError):  # not glibc
         pass
