@@ -378,3 +378,22 @@ def test_elbow_variance_is_the_diagonal_of_j_p_jt():
     P[:, 6:9, :] = P[:, :, 6:9] = 0.0
     assert np.array_equal(arm_smoother._elbow_var(q, x, P, arm),
                           np.diagonal(P[:, :3, :3], axis1=1, axis2=2))
+
+
+def test_corrected_is_the_error_rotation_removed_in_any_chunks(monkeypatch):
+    """corrected(q̂, δθ) = exp(−[δθ]×) R̂ (Rodrigues' closed form, independent of the
+    quaternion code) to 1e-12; taken quat.ROWS_AT_ONCE rows at a time (memory), the same
+    numbers as all at once, bit for bit; δθ = 0 leaves q̂'s rotation as it is."""
+    rng = np.random.default_rng(9)
+    q = quat.normalize(rng.normal(size=(17, 4)))
+    th = 0.05 * rng.normal(size=(17, 3))
+    th[3] = 0.0
+    whole = arm_smoother.corrected(q, th)
+    monkeypatch.setattr(quat, "ROWS_AT_ONCE", 4)
+    assert np.array_equal(arm_smoother.corrected(q, th), whole)
+    for k in range(17):
+        a = np.linalg.norm(th[k])
+        K = imu_fold.skew(th[k] / a) if a > 0 else np.zeros((3, 3))
+        E = np.eye(3) - np.sin(a) * K + (1 - np.cos(a)) * K @ K  # exp(−a [u]×)
+        np.testing.assert_allclose(quat.to_matrix(whole[k]), E @ quat.to_matrix(q[k]),
+                                   rtol=0, atol=1e-12)

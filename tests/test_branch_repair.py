@@ -135,6 +135,10 @@ def test_a_run_put_on_the_wrong_root_is_moved_back(accel_error, lo, hi):
     got, moved = branch_repair.repair(X, roots, _steps(F, b))
     assert moved == 1
     assert np.abs(got[:, :3] - p).max() < 1e-12
+    X_in = X.copy()  # in place (the arm smoother's): the same repair, X itself returned
+    same, again = branch_repair.repair(X_in, roots, _steps(F, b), in_place=True)
+    assert same is X_in and again == 1 and np.array_equal(same, got)
+    assert not np.array_equal(X, got)  # without in_place, X was left as it was
 
 
 @pytest.mark.parametrize("accel_error", [0.0, 0.03])

@@ -96,6 +96,9 @@ def test_rts_smooth_is_the_textbook_smoother(block):
     np.testing.assert_allclose(Ps, P_ref, rtol=0, atol=1e-12)
     xm, none = gaussian.rts_smooth(x, P, F, b, Q, block=block, means_only=True)
     assert none is None and np.array_equal(xm, xs)  # the means need no smoothed covariance
+    x_in = x.copy()  # written over in place: the same numbers, no second array
+    xi, _ = gaussian.rts_smooth(x_in, P, F, b, Q, block=block, means_only=True, in_place=True)
+    assert xi is x_in and np.array_equal(xi, xs)
 
 
 def test_smooth_uses_the_steps_of_every_frame():

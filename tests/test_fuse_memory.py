@@ -74,10 +74,18 @@ def test_the_smoother_runs_without_the_imu_samples_first_pass_or_start(detected,
     monkeypatch.setattr(fuse_stage.models, "composite_steps", composite_steps)
     monkeypatch.setattr(methods, "smooth", first_pass)
     monkeypatch.setattr(arm_smoother, "smooth_blocked", watched)
+    mapped, set_mapped = [], fuse_stage.large_arrays_mapped
+
+    def large_arrays_mapped():  # before reading: the reader's arrays freed to the system too
+        mapped.append(len(imu))
+        set_mapped()
+
+    monkeypatch.setattr(fuse_stage, "large_arrays_mapped", large_arrays_mapped)
     out = pipeline.fuse(detected)
     assert out["method"] == "arm-smoother" and Path(out["trajectory"]).exists()
     assert len(imu) == 4 and len(first) == 1 and len(steps) == 3 and len(passes) >= 2
     assert all(p == (0, 0, 0) for p in passes), passes
+    assert mapped == [0]
 
 
 def test_without_release_the_inputs_keep_their_imu(detected):

@@ -161,13 +161,18 @@ def test_ray_sphere_points_are_on_the_ray_and_on_the_sphere():
     assert (d[:, 0] <= d[:, 1]).all()
 
 
-def test_the_kernels_ray_sphere_points_are_the_references():
+@pytest.mark.parametrize("chunk", [None, 7])
+def test_the_kernels_ray_sphere_points_are_the_references(chunk, monkeypatch):
     """pf-constraint's kernel makes a re-seeding frame's two points itself, from the frame's
     ray: the same numbers as robust.ray_sphere_points (which the numpy reference re-seeds
     on), bit for bit, where the ray meets the sphere and where it misses it; and
-    ray_sphere_points given the centres it would compute is itself unchanged."""
+    ray_sphere_points given the centres it would compute is itself unchanged; its rows taken
+    all at once or ``chunk`` at a time (quat.ROWS_AT_ONCE: memory)."""
+    from armtrack_cli.core import quaternion as quat
     from armtrack_cli.fuse.pf_guard_kernel import _ray_sphere_points
 
+    if chunk is not None:
+        monkeypatch.setattr(quat, "ROWS_AT_ONCE", chunk)
     inp, _, _, proj, arm = _camera_problem(n_frames=60)
     z = inp.z.copy()
     z[::7] += np.array([90.0, -70.0])  # off the sphere's outline: these rays miss it

@@ -91,3 +91,19 @@ def test_rotation_vector_maps_are_the_axis_angle_closed_form():
     np.testing.assert_allclose(Q.to_rotvec(q), a[:, None] * u, atol=1e-12)
     np.testing.assert_allclose(Q.to_rotvec(-q), a[:, None] * u, atol=1e-12)
     np.testing.assert_allclose(Q.from_rotvec(a[:, None] * u), q, atol=1e-12)
+
+
+def test_rotate_in_row_chunks_is_every_rows_own_product(monkeypatch):
+    """(n, 4) rows rotated ROWS_AT_ONCE at a time (memory): each row R(q_k) v_k as a 3 × 3
+    product of its own, bit for bit, for one vector or one per row; NaN rows stay NaN."""
+    rng = np.random.default_rng(6)
+    q = Q.normalize(rng.normal(size=(23, 4)))
+    q[4] = np.nan
+    v, u = rng.normal(size=(23, 3)), rng.normal(size=3)
+    monkeypatch.setattr(Q, "ROWS_AT_ONCE", 5)
+    R = Q.to_matrix(q)
+    for w, each in ((v, v), (u, np.broadcast_to(u, v.shape))):
+        got = Q.rotate(q, w)
+        ref = np.array([np.einsum("ij,j->i", R[k], each[k]) for k in range(23)])
+        assert got.shape == (23, 3) and np.array_equal(got, ref, equal_nan=True)
+        assert np.isnan(got[4]).all() and np.isfinite(np.delete(got, 4, 0)).all()

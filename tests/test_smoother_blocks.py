@@ -191,3 +191,15 @@ def test_orientation_track_in_chunks_equals_one_chunk(monkeypatch):
     parts = imu_fold.orientation_track(t, q, w, tf), imu_fold.rotation_integral(t, q)
     assert np.array_equal(parts[0].dtheta, whole[0].dtheta)
     assert np.array_equal(parts[0].G, whole[0].G) and np.array_equal(parts[1], whole[1])
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 4096])
+def test_steps_in_place_are_np_diffs(monkeypatch, chunk):
+    """orientation_track's steps taken in place, FOLD_FRAMES rows at a time from the last:
+    np.diff's rows after a row of zeros, bit for bit, whatever the chunk."""
+    rng = np.random.default_rng(8)
+    monkeypatch.setattr(imu_fold, "FOLD_FRAMES", chunk)
+    for shape in ((11, 3), (11, 3, 3), (1, 3)):
+        y = rng.normal(size=shape) * 1e3
+        ref = np.concatenate([np.zeros((1,) + shape[1:]), np.diff(y, axis=0)])
+        assert np.array_equal(imu_fold._steps_in_place(y.copy()), ref)

@@ -143,8 +143,8 @@ def ukf_update(s: Gaussian, z: np.ndarray | None, h, R: np.ndarray, sp: SigmaPoi
 
 def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
                b: np.ndarray | None = None, Q: np.ndarray | None = None, *, steps=None,
-               block: int = 4096, means_only: bool = False, P_add: np.ndarray | float = 0.0
-               ) -> tuple[np.ndarray, np.ndarray | None]:
+               block: int = 4096, means_only: bool = False, P_add: np.ndarray | float = 0.0,
+               in_place: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
     x (n_steps, n), P (n_steps, n, n): filtered means and covariances; F (n_steps, n, n),
@@ -158,11 +158,12 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
     Instead of F, b, Q: ``steps(lo, hi)`` giving their rows [lo, hi), one block at a time, so
     that they are never held for the whole session. ``means_only``: the smoothed means alone
     (they need no smoothed covariance), Ps None. ``P_add``: added to every P (a jitter), a
-    block at a time, so that P is never copied whole.
+    block at a time, so that P is never copied whole. ``in_place``: the smoothed means written
+    over x (returned as xs), which each step reads before it writes (the steps go backwards).
     """
     if steps is None:
         steps = lambda lo, hi: (F[lo:hi], b[lo:hi], Q[lo:hi])  # noqa: E731
-    xs, Ps = x.copy(), None if means_only else P + P_add
+    xs, Ps = x if in_place else x.copy(), None if means_only else P + P_add
     for stop in range(x.shape[0] - 1, 0, -block):  # steps k in [start, stop), backwards
         start = max(0, stop - block)
         Fn, bn, Qn = steps(start + 1, stop + 1)

@@ -103,10 +103,16 @@ def projection_jacobians(proj: Projection, p: np.ndarray) -> np.ndarray:
 
 
 def corrected(q_hat: np.ndarray, dtheta: np.ndarray) -> np.ndarray:
-    """R = exp(−[δθ]×) R̂ as quaternions (n, 4): the IMU's orientation with its error removed."""
-    ang = np.linalg.norm(dtheta, axis=1)
-    axis = dtheta / np.maximum(ang, 1e-300)[:, None]
-    return quat.normalize(quat.multiply(quat.from_axis_angle(axis, -ang), q_hat))
+    """R = exp(−[δθ]×) R̂ as quaternions (n, 4): the IMU's orientation with its error removed;
+    quat.ROWS_AT_ONCE rows at a time (their temporaries, a dozen arrays a row; every row's
+    numbers its own)."""
+    out = np.empty(q_hat.shape)
+    for a in range(0, q_hat.shape[0], quat.ROWS_AT_ONCE):
+        b = min(a + quat.ROWS_AT_ONCE, q_hat.shape[0])
+        ang = np.linalg.norm(dtheta[a:b], axis=1)
+        axis = dtheta[a:b] / np.maximum(ang, 1e-300)[:, None]
+        out[a:b] = quat.normalize(quat.multiply(quat.from_axis_angle(axis, -ang), q_hat[a:b]))
+    return out
 
 
 def forearm(q_hat: np.ndarray, dtheta: np.ndarray, arm: Arm) -> np.ndarray:
@@ -236,6 +242,7 @@ def run(imu: ImuSamples | list, t_frames: np.ndarray, z: np.ndarray, q_hat: np.n
     X, var, elbow_var, gated, iterations, runs = _iterate(
         fd, track, period, (m0, Pm0), start, z, q_hat, proj, s, arm, shoulder, use_c, use_k,
         still, camera, scale)
+    del fd, track  # the model's IMU, not held while the result is made (issue 15)
     X, q_hat = X[m_pre:], q_hat[m_pre:]  # the video's frames
     return Smoothed(X, var[m_pre:], corrected(q_hat, X[:, TH]), elbow_var[m_pre:],
                     gated[m_pre:], iterations, gyro, runs)
@@ -302,11 +309,11 @@ def repaired(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, 
              camera: bool, steps: branch_repair.Steps) -> tuple[np.ndarray, int]:
     """branch_repair.repair on the trajectory X (n, d) of the paper's fixed shoulder: the
     roots of each detection's ray (through the camera as X corrects it, ``camera``) on the
-    sphere of the orientation X corrects; (X repaired, the runs moved)."""
+    sphere of the orientation X corrects; (X repaired in place, the runs moved)."""
     if camera:
         proj = camera_pose.moved(proj, X[:, camera_slice(X.shape[1], False)].mean(axis=0))
     points = robust.ray_sphere_points(proj, arm, z, corrected(q_hat, X[:, TH]))
-    return branch_repair.repair(X, points, steps)
+    return branch_repair.repair(X, points, steps, in_place=True)
 
 
 def _before(X: np.ndarray, was: dict, lo: int, hi: int) -> np.ndarray:

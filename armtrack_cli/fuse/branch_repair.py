@@ -151,7 +151,8 @@ def misfit(P: np.ndarray, D: np.ndarray, tau: np.ndarray) -> float:
 
 
 def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float = MIN_GAP_M,
-           margin: int = MARGIN, ratio: float = RATIO) -> tuple[np.ndarray, int]:
+           margin: int = MARGIN, ratio: float = RATIO, in_place: bool = False
+           ) -> tuple[np.ndarray, int]:
     """(X with its wrongly rooted stretches moved to the other root, how many moved) for the
     trajectory X (n, d) (p its first three columns, the IMU's errors in the rest as the
     process ``steps`` takes them) and the roots ``points`` (n, 2, 3); a stretch moves as
@@ -162,9 +163,10 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
     right ones, sees the IMU agree with the other root on its whole window, the smallest
     ratio of all. So the stretch of smallest ratio (below ``ratio``) moves, those that
     share frames off the grazing ones with it are dropped, those whose windows reach it are
-    tested again, and so on."""
+    tested again, and so on. ``in_place``: X itself repaired and returned, not a copy (the
+    arm smoother's, which holds no other: a second (n, d) trajectory, issue 15)."""
     n = X.shape[0]
-    X = X.copy()
+    X = X if in_place else X.copy()
     code = roots_of(X[:, :3], points, min_gap_m)
     cands = candidates(X[:, :3], points, min_gap_m, root=code)
     windows = [(max(lo - margin, 0), min(hi + margin, n)) for lo, hi, _ in cands]
@@ -183,7 +185,7 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
     count = 0
     while ratios.size and ratios.min() < ratio:
         lo, hi, r = cands[int(np.argmin(ratios))]
-        X[:, :3] = moved(X[:, :3], points, code, lo, hi, r)
+        X[lo:hi, :3] = moved(X[lo:hi, :3], points[lo:hi], code[lo:hi], 0, hi - lo, r)
         code[lo:hi] = np.where(code[lo:hi] == r, 1 - r, code[lo:hi])
         count += 1
         for j, (lj, hj, rj) in enumerate(cands):

@@ -205,5 +205,14 @@ def orientation_track(t_imu: np.ndarray, q_WB: np.ndarray, w_B: np.ndarray,
 
     c = _streamed_at(t_imu, t_frames, _running_sums(t_imu, rotvec_steps), (3,))
     G = _streamed_at(t_imu, t_frames, _running_sums(t_imu, _rotation_steps(t_imu, q_WB)), (3, 3))
-    return OrientationTrack(np.concatenate([np.zeros((1, 3)), np.diff(c, axis=0)]),
-                            np.concatenate([np.zeros((1, 3, 3)), np.diff(G, axis=0)]))
+    return OrientationTrack(_steps_in_place(c), _steps_in_place(G))
+
+
+def _steps_in_place(y: np.ndarray) -> np.ndarray:
+    """y (n, ...) made its steps y_k − y_{k−1} (row 0: zeros) in place, FOLD_FRAMES rows at a
+    time from the last: np.diff's numbers without a second and third (n, ...) array."""
+    for hi in range(y.shape[0], 1, -FOLD_FRAMES):
+        lo = max(hi - FOLD_FRAMES, 1)
+        y[lo:hi] -= y[lo - 1:hi - 1].copy()  # rows below lo are still the sums
+    y[:1] = 0.0
+    return y

@@ -269,7 +269,8 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
         elif method == "pf-constraint" and s.imu_bias_window_s > 0:
             est = run_bias_corrected(inp, x0, P0, proj, s, arm, est)
         if method == "arm-smoother":  # its first pass: pf-constraint, RTS-smoothed
-            first = [smooth(est, inp, s, "pf-constraint", means_only=True).mean]  # the means
+            first = [smooth(est, inp, s, "pf-constraint", means_only=True,  # the means,
+                            in_place=True).mean]  # over est's: no second (n, 6) array
             del est  # its (n, 6, 6) covariances, not held through the smoother (issue 15)
             inp.drop_steps()  # nor the model's steps (n, 7), where inp is fuse's, run once
             return run_arm_smoother(inp, x0, P0, proj, s, arm, first)
@@ -350,13 +351,18 @@ def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
                      summary=summary, var=r.var)  # (p, v) alone: not the whole state held
 
 
+SMOOTH_BLOCK = 1024  # frames whose RTS gains are computed at once (a 4,096-frame block's
+#                     temporaries were ~8 MB, the peak of fuse's first pass at 60 minutes)
+
+
 def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str, *,
-           means_only: bool = False) -> Estimates:
+           means_only: bool = False, in_place: bool = False) -> Estimates:
     """Offline: each frame's estimate also uses every later detection. The filtered Gaussian
     (for particle filters, the particles' weighted mean and covariance) is smoothed backwards
     through the same linear dynamics; the random-walk layer of pf-constraint adds its variance
     to the process noise of each step. ``means_only``: the means alone (cov None), all the
-    arm smoother's first pass takes."""
+    arm smoother's first pass takes; ``in_place``: written over est.mean (whose caller is
+    done with it)."""
     walk = np.diag(np.r_[np.full(3, s.walk_pos_m), np.full(3, s.walk_vel_m_s)] ** 2) \
         if method == "pf-constraint" else 0.0
 
@@ -365,5 +371,6 @@ def smooth(est: Estimates, inp: Inputs, s: FuseSettings, method: str, *,
         return F, b, Q + walk + 1e-12 * np.eye(6)
 
     x, P = gaussian.rts_smooth(est.mean, est.cov, steps=steps, means_only=means_only,
-                               P_add=1e-12 * np.eye(6))  # P None then
+                               P_add=1e-12 * np.eye(6), block=SMOOTH_BLOCK,
+                               in_place=in_place)  # P None with means_only
     return Estimates(x, P, est.ess, est.codes)

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from armtrack_cli.core import quaternion as quat
 from armtrack_cli.fuse import models
 
 NONE, USED, GATED, REACQUIRED, RESEEDED = 0, 1, 2, 3, 4  # per-frame detection codes
@@ -96,11 +97,15 @@ def ray_sphere_points(proj, arm, z: np.ndarray, q_WB: np.ndarray,
     seen = np.isfinite(z).all(axis=1)
     if not seen.any():
         return out
-    d = detection_rays(proj, z)[seen]
-    c = arm.sphere_centres(q_WB[seen]) if centres is None else centres[seen]
-    near, far, _ = models.ray_sphere(proj.eye, d, c, arm.L1)
-    s = np.maximum(np.stack([near, far], 1), 0.0)  # never behind the camera
-    out[seen] = proj.eye + s[:, :, None] * d[:, None, :]
+    rows = np.flatnonzero(seen)
+    d = detection_rays(proj, z)[rows]
+    for a in range(0, rows.size, quat.ROWS_AT_ONCE):  # every row's numbers its own: the
+        b = min(a + quat.ROWS_AT_ONCE, rows.size)     # temporaries a chunk's (issue 15)
+        r = rows[a:b]
+        c = arm.sphere_centres(q_WB[r]) if centres is None else centres[r]
+        near, far, _ = models.ray_sphere(proj.eye, d[a:b], c, arm.L1)
+        s = np.maximum(np.stack([near, far], 1), 0.0)  # never behind the camera
+        out[r] = proj.eye + s[:, :, None] * d[a:b, None, :]
     return out
 
 

@@ -21,7 +21,13 @@ from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.kernel_setup import load_kernels
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings
-from armtrack_cli.pipeline.common import out_dir, release_memory, resolve_recipe, settings_for
+from armtrack_cli.pipeline.common import (
+    large_arrays_mapped,
+    out_dir,
+    release_memory,
+    resolve_recipe,
+    settings_for,
+)
 from armtrack_cli.pipeline.imu_offset import resolve_imu_offset
 from armtrack_cli.session.arm_file import write_arm_estimate
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
@@ -128,6 +134,7 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         raise ConfigError(session.toml_path, f"has no [arm] section, which {s.method} needs",
                           "use inertial, ekf, ukf or pf, or add the arm model")
     dest = out_dir(session, out)
+    large_arrays_mapped()  # session-long arrays returned when freed, not kept in the heap
     p = prepare(session, dest, s, beside=True)  # the offset's check: started below
     auto = None
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
