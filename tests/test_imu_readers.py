@@ -209,3 +209,43 @@ def test_gyro_in_degrees_is_refused(tmp_path):
     (tmp_path / "imu.csv").write_text("\n".join(rows))
     with pytest.raises(ImuFileError, match="degrees per second"):
         read_imu(tmp_path / "imu.csv")
+
+
+@pytest.mark.parametrize("row,col,value", [(0, 0, 400.0), (1234, 2, -200.0), (2999, 1, np.inf)])
+def test_the_checks_name_the_same_sample_a_block_at_a_time(monkeypatch, row, col, value):
+    """session/imu.py's checks take their temporaries BLOCK_ROWS samples at a time: with
+    blocks of 7 they find the same first damaged sample, gyro scale and median |acc| as with
+    the whole recording in one block."""
+    from armtrack_cli.core.streams import ImuSamples
+    from armtrack_cli.session import imu, imu_checks
+
+    rng = np.random.default_rng(3)
+    n = 3000
+    acc = rng.normal([0, 0, 9.81], 0.5, (n, 3))
+    gyr = rng.normal(0, 0.5, (n, 3))
+    acc[rng.random(n) < 0.01] = np.nan
+    bad = acc.copy()
+    bad[row, col] = value
+    degrees = gyr * 180 / np.pi
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q[77] *= 1.2
+
+    def errors():
+        out = []
+        for a, g in ((bad, gyr), (acc, degrees), (acc / 9.81, gyr)):
+            s = ImuSamples("x.txt", "csv", np.arange(n) / 100.0, a, g, None, None, 100.0)
+            with pytest.raises(ImuFileError) as e:
+                imu.check_units(s)
+                imu.check_usable(s)
+            out.append(str(e.value))
+        with pytest.raises(ImuFileError) as e:
+            imu_checks.unit_quaternions(Path("x.txt"), q.copy(), str, "q", "")
+        return out + [str(e.value)]
+
+    whole = errors()
+    monkeypatch.setattr(imu, "BLOCK_ROWS", 7)
+    monkeypatch.setattr(imu_checks, "BLOCK_ROWS", 7)
+    assert errors() == whole
+    assert f"sample {row} " in whole[0] and "reaches" in whole[1] and "median" in whole[2]
+    assert "77: q has norm 1.200" in whole[3]
