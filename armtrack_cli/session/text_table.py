@@ -56,11 +56,14 @@ class TextTable:
     def columns(self, *names: str) -> np.ndarray:
         """(N, len(names)) array of the named columns: a group read as such itself (no copy:
         the reader's to keep or change), else a copy of the table's columns."""
-        idx = tuple(self.index(n) for n in names)
+        return self.block(tuple(self.index(n) for n in names))
+
+    def block(self, idx: tuple[int, ...]) -> np.ndarray:
+        """(N, len(idx)) array of the columns idx: columns() by index."""
         if idx in self.groups:
             return self.groups[idx]
         if self.data is None:
-            raise KeyError(f"columns {names} were not read (not one of the table's groups)")
+            raise KeyError(f"columns {idx} were not read (not one of the table's groups)")
         return self.data[:, list(idx)]
 
 
