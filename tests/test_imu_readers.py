@@ -249,3 +249,24 @@ def test_the_checks_name_the_same_sample_a_block_at_a_time(monkeypatch, row, col
     assert errors() == whole
     assert f"sample {row} " in whole[0] and "reaches" in whole[1] and "median" in whole[2]
     assert "77: q has norm 1.200" in whole[3]
+
+
+@pytest.mark.parametrize("encoding", ["cdr", "json"])
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_mcap_read_in_blocks_is_the_recording(tmp_path, monkeypatch, encoding, shuffled):
+    """imu_mcap makes its arrays BLOCK messages at a time: with blocks of 7 (and messages
+    written out of time order, sorted by the reader) the recording written, to the bit."""
+    from armtrack_cli.session import imu_mcap
+
+    t, acc, gyr, q = _motion()
+    order = np.random.default_rng(5).permutation(t.size) if shuffled else np.arange(t.size)
+    write_imu_mcap(tmp_path / "imu.mcap", t[order] + 0.5, acc[order], gyr[order], q[order],
+                   encoding=encoding)
+    whole = read_imu(tmp_path / "imu.mcap")
+    monkeypatch.setattr(imu_mcap, "BLOCK", 7)
+    s = read_imu(tmp_path / "imu.mcap")
+    for name in ("t", "acc", "gyr", "quat"):
+        np.testing.assert_array_equal(getattr(s, name), getattr(whole, name))
+    np.testing.assert_array_equal(s.acc, acc)
+    np.testing.assert_array_equal(s.gyr, gyr)
+    np.testing.assert_allclose(s.quat, q, atol=1e-12)
