@@ -32,7 +32,10 @@ columns at δ, the rays, their Jacobians and every product are formed CHUNK fram
 (the sums WᵀW, Wᵀy, DᵀW, DᵀD carried across chunks); what is kept whole is ∫a dt and ∫R dt at
 the IMU's samples (96 bytes a sample) and the Jacobians, image velocities and drift rows at the
 frames (about 110 bytes a frame): 45 MB at 60 minutes, where the whole-session temporaries
-peaked near 160 MB (issue 15).
+peaked near 160 MB (issue 15). A declared offset's check on a long session scores only its
+most informative windows (fuse/sync_windows.py): the problem is then cut into stretches
+(SyncProblem.frame_cuts, imu_cuts), each with its own smoothing, drift spline, integrals and
+chain of rays, sharing δ, the scale and the bias; its cost and memory are the windows'.
 
 Missing detections are missing: lost runs up to BRIDGE_S are bridged for the derivative
 only, a window holding a longer loss gives no image velocity; an IMU gap longer than GAP_S
@@ -42,12 +45,11 @@ gives no IMU velocity. Measured in docs/validation-sync.md.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 
 from armtrack_cli.core.bounded_min import bounded_min
-from armtrack_cli.core.curves import bspline_rows, hermite, savgol_coeffs
+from armtrack_cli.core.curves import bspline_rows, hermite
 from armtrack_cli.core.grid_search import coarse_to_fine
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
@@ -60,11 +62,8 @@ from armtrack_cli.fuse.drift_ls import (
     normal_parts,
 )
 from armtrack_cli.fuse.imu_fold import rotation_integral
-from armtrack_cli.fuse.sync_rays import (  # noqa: F401 (wrist_on_rays: tests')
-    ray_jacobians,
-    stretches,
-    wrist_on_rays,
-)
+from armtrack_cli.fuse.sync_rays import ray_jacobians, wrist_on_rays  # noqa: F401 (tests')
+from armtrack_cli.fuse.sync_signal import bridge, joined, savgol_cut, stretches
 
 WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
 KNOT_S = 6.0  # s between the drift spline's knots: the gyro-anchored orientation's leak is
@@ -109,39 +108,6 @@ class SyncProblem:
     #                                (velocity, ∫R dt) start again from zero there
 
 
-def _joined(parts: list[np.ndarray]) -> np.ndarray:
-    """The stretches' arrays end to end (one stretch's as it is: no copy)."""
-    return parts[0] if len(parts) == 1 else np.concatenate(parts)
-
-
-@lru_cache(maxsize=8)
-def _coeffs(window: int, deriv: int, dt: float) -> np.ndarray:
-    """savgol_coeffs, once per (window, deriv, dt): every δ's columns use the same (read only)."""
-    return savgol_coeffs(window, deriv, dt)
-
-
-def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
-    """Cubic Savitzky–Golay along axis 0 (odd ``window``); NaN wherever the window holds a NaN
-    or runs off either end."""
-    c = _coeffs(window, deriv, dt)
-    h = window // 2
-    out = np.full(x.shape, np.nan)
-    if x.shape[0] < window:
-        return out
-    m = x.shape[0] - 2 * h
-    acc = out[h:h + m]  # Σ_j c_j x[k − h + j], on views (a NaN in the window stays NaN)
-    acc[...] = c[0] * x[:m]
-    for j in range(1, window):
-        acc += c[j] * x[j:j + m]
-    return out
-
-
-def _savgol_cut(x: np.ndarray, cuts: tuple[int, ...], window: int, deriv: int, dt: float
-                ) -> np.ndarray:
-    """_savgol on each stretch of x that ``cuts`` make, as if each were all there is."""
-    return _joined([_savgol(x[a:b], window, deriv, dt) for a, b in stretches(cuts, x.shape[0])])
-
-
 @dataclass(frozen=True)
 class _Prepared:
     vel_img: np.ndarray  # (n, 2) px/s, the detections' velocity (NaN = none)
@@ -163,31 +129,13 @@ def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Pr
     dt = float(np.median(np.diff(p.t_frames)))
     window, most = max(5, int(round(WINDOW_S / dt)) | 1), int(round(BRIDGE_S / dt))
     frames, samples = stretches(p.frame_cuts, p.t_frames.size), stretches(p.imu_cuts, p.t_imu.size)
-    vel = _savgol_cut(_joined([_bridge(p.uv[a:b], most) for a, b in frames]), p.frame_cuts,
+    vel = savgol_cut(joined([bridge(p.uv[a:b], most) for a, b in frames]), p.frame_cuts,
                       window, 1, dt)
-    v_imu = _joined([np.vstack([np.zeros((1, 3)), np.cumsum(
+    v_imu = joined([np.vstack([np.zeros((1, 3)), np.cumsum(
         0.5 * (p.a_W[a + 1:b] + p.a_W[a:b - 1]) * np.diff(p.t_imu[a:b])[:, None], axis=0)])
         for a, b in samples])
-    rint = _joined([rotation_integral(p.t_imu[a:b], p.q_WB[a:b]) for a, b in samples])
+    rint = joined([rotation_integral(p.t_imu[a:b], p.q_WB[a:b]) for a, b in samples])
     return _Prepared(vel, J, _spline_basis(p.t_frames, frames), rint, v_imu, dt, window)
-
-
-def _bridge(x: np.ndarray, most: int) -> np.ndarray:
-    """x (n, d) with runs of at most ``most`` missing rows between two present ones filled
-    linearly (for the derivative only: a lost frame or two must not void a whole window);
-    longer runs stay missing."""
-    ok = np.isfinite(x).all(axis=1)
-    idx = np.flatnonzero(ok)
-    out = x.copy()
-    if idx.size < 2:
-        return out
-    i = np.arange(x.shape[0])
-    nxt = np.clip(np.searchsorted(idx, i), 0, idx.size - 1)
-    prv = np.clip(nxt - 1, 0, idx.size - 1)
-    fill = ~ok & (i > idx[0]) & (i < idx[-1]) & (idx[nxt] - idx[prv] - 1 <= most)
-    for a in range(x.shape[1]):
-        out[fill, a] = np.interp(i[fill], idx, x[idx, a])
-    return out
 
 
 def _spline_basis(t: np.ndarray, frames: list[tuple[int, int]]) -> SplineRows:
@@ -204,7 +152,7 @@ def _spline_basis(t: np.ndarray, frames: list[tuple[int, int]]) -> SplineRows:
         start, w = bspline_rows(np.clip(u, inner[0], inner[-1]), knots, k)
         rows.append((start + m, w))
         m += knots.size - k - 1
-    return SplineRows(_joined([r[0] for r in rows]), _joined([r[1] for r in rows]), m)
+    return SplineRows(joined([r[0] for r in rows]), joined([r[1] for r in rows]), m)
 
 
 def _imu_covers(p: SyncProblem, t: np.ndarray) -> np.ndarray:
@@ -236,7 +184,7 @@ def columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None
     W = pre.J[sl] @ np.concatenate([v[:, :, None], at], axis=2)  # (k, 2, 4)
     a, b, _ = sl.indices(p.t_frames.size)
     cuts = tuple(k - a for k in p.frame_cuts if a < k < b)
-    return _savgol_cut(W.reshape(-1, 8), cuts, pre.window, 0, pre.dt).reshape(-1, 2, 4)
+    return savgol_cut(W.reshape(-1, 8), cuts, pre.window, 0, pre.dt).reshape(-1, 2, 4)
 
 
 def _chunks(p: SyncProblem, pre: _Prepared, delta: float, spans=None):
@@ -269,7 +217,7 @@ def _usable(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
     a detection's velocity, and the IMU covering every frame of the smoothing's window (the
     bias's columns are finite wherever J is: their times are clipped to the recording)."""
     gap = np.where(_imu_covers(p, p.t_frames - delta), 0.0, np.nan)[:, None]
-    covered = np.isfinite(_savgol_cut(gap, p.frame_cuts, pre.window, 0, pre.dt))[:, 0]
+    covered = np.isfinite(savgol_cut(gap, p.frame_cuts, pre.window, 0, pre.dt))[:, 0]
     return covered & np.isfinite(pre.vel_img).all(axis=1) & np.isfinite(pre.J).all(axis=(1, 2))
 
 

@@ -12,15 +12,10 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import CHUNK
+from armtrack_cli.fuse.sync_signal import stretches
 
 if TYPE_CHECKING:
     from armtrack_cli.fuse.imu_sync import SyncProblem
-
-
-def stretches(cuts: tuple[int, ...], n: int) -> list[tuple[int, int]]:
-    """(start, end) of the stretches that ``cuts`` (interior starts) make of 0 … n − 1."""
-    edges = [0, *cuts, n]
-    return list(zip(edges[:-1], edges[1:]))
 
 GRAZE_M = 0.15  # m: intersections closer than this along the ray are a grazing ray's (with 0.5 px
 #                of noise a grazing ray's two part by 10 cm from one frame to the next)

@@ -19,14 +19,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from armtrack_cli.fuse.imu_sync import (
-    BRIDGE_S,
-    WINDOW_S,
-    SyncProblem,
-    _bridge,
-    _imu_covers,
-    _savgol,
-)
+from armtrack_cli.fuse.imu_sync import BRIDGE_S, WINDOW_S, SyncProblem, _imu_covers
+from armtrack_cli.fuse.sync_signal import bridge, savgol
 
 CHECK_MIN_S = 240.0  # a session this long is checked on windows (shorter: every frame)
 CHECK_WINDOWS = 8  # … this many, one in each of as many equal parts of the session
@@ -56,7 +50,7 @@ def _best_windows(p: SyncProblem, dt: float, w: int, centre_s: float, search_s: 
     None when a part has no such window (its frames unseen or uncovered)."""
     n = p.t_frames.size
     window = max(5, int(round(WINDOW_S / dt)) | 1)
-    acc = _savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 2, dt)  # px/s²
+    acc = savgol(bridge(p.uv, int(round(BRIDGE_S / dt))), window, 2, dt)  # px/s²
     info = np.sum(acc**2, axis=1)
     reach = search_s + PAD_S
     covered = (_imu_covers(p, p.t_frames - centre_s - reach)
