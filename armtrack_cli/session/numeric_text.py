@@ -11,6 +11,7 @@ Qualisys, Vicon, video time stamps) and plain_tables (armtrack's own trajectory 
 from __future__ import annotations
 
 import io
+import mmap
 import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -24,7 +25,7 @@ CHUNK_BYTES = 1 << 20  # 1 MB of text a chunk (~10,000 rows of an IMU export): i
 #                        their copies and loadtxt's rows held at once (4 MB held ~20 MB more
 #                        at the peak, no faster: 1.1 s for a 60-minute IMU or Qualisys export)
 CHUNK_LINES = 10_000  # the same for lines already in memory
-RESERVE_BYTES = 1 << 30  # np.empty's pages past the rows read are never touched nor resident
+RESERVE_BYTES = 1 << 30  # _reserve's pages past the rows read are never touched nor resident
 MISSING_TOKENS = frozenset({"", "nan", "na", "n/a", "null", "-nan"})
 FAST_DELIMITERS = ("\t", ",", ";", None)  # what loadtxt splits as the row-by-row parse does
 SEPARATOR = {"\t": "tab", ",": "comma", ";": "semicolon", " ": "space", None: "space"}
@@ -125,9 +126,9 @@ def read_rows(chunks: Iterable[tuple[bytes, int, int]], most: int, layout: Layou
     into one array per group and no other column kept: what a reader keeps is all that is
     held, no table beside it (issue 15). ``by_row=False``: a chunk that is not plain numbers
     raises Irregular instead of being read row by row."""
-    parts = [np.empty((most, len(g))) for g in groups] if groups is not None else None
-    data = np.empty((most, layout.n)) if parts is None else None
-    line_of = np.empty(most, dtype=np.int64)
+    parts = [_reserve((most, len(g))) for g in groups] if groups is not None else None
+    data = _reserve((most, layout.n)) if parts is None else None
+    line_of = _reserve((most,), np.int64)
     notes: list[str] = []
     k = 0
     for (text, first, lines), last in _marked_last(chunks):
@@ -152,6 +153,17 @@ def read_rows(chunks: Iterable[tuple[bytes, int, int]], most: int, layout: Layou
         raise error(path, "has a column header but no data rows (truncated?)")
     return Rows(None if data is None else data[:k], line_of[:k], tuple(notes),
                 tuple(p[:k] for p in parts or ()))
+
+
+def _reserve(shape: tuple[int, ...], dtype=np.float64) -> np.ndarray:
+    """An array of ``shape`` on a private anonymous mapping of its own (RssAnon, as np.empty's
+    pages are): only the pages written become resident, as with np.empty, but without numpy's
+    transparent-huge-page advice for arrays of 4 MB or more, under which each array's last
+    written page faulted in a whole 2 MB (a reader's six arrays: up to 12 MB more than they
+    hold; a 10-minute IMU read peaked 37 MB, 30 without). Freed with its last view."""
+    size = int(np.prod(shape))
+    buf = mmap.mmap(-1, max(size * np.dtype(dtype).itemsize, 1), flags=mmap.MAP_PRIVATE)
+    return np.frombuffer(buf, dtype=dtype, count=size).reshape(shape)
 
 
 def _marked_last(chunks: Iterable[tuple[bytes, int, int]]
