@@ -209,3 +209,64 @@ def test_gyro_in_degrees_is_refused(tmp_path):
     (tmp_path / "imu.csv").write_text("\n".join(rows))
     with pytest.raises(ImuFileError, match="degrees per second"):
         read_imu(tmp_path / "imu.csv")
+
+
+@pytest.mark.parametrize("row,col,value", [(0, 0, 400.0), (1234, 2, -200.0), (2999, 1, np.inf)])
+def test_the_checks_name_the_same_sample_a_block_at_a_time(monkeypatch, row, col, value):
+    """session/imu.py's checks take their temporaries BLOCK_ROWS samples at a time: with
+    blocks of 7 they find the same first damaged sample, gyro scale and median |acc| as with
+    the whole recording in one block."""
+    from armtrack_cli.core.streams import ImuSamples
+    from armtrack_cli.session import imu, imu_checks
+
+    rng = np.random.default_rng(3)
+    n = 3000
+    acc = rng.normal([0, 0, 9.81], 0.5, (n, 3))
+    gyr = rng.normal(0, 0.5, (n, 3))
+    acc[rng.random(n) < 0.01] = np.nan
+    bad = acc.copy()
+    bad[row, col] = value
+    degrees = gyr * 180 / np.pi
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q[77] *= 1.2
+
+    def errors():
+        out = []
+        for a, g in ((bad, gyr), (acc, degrees), (acc / 9.81, gyr)):
+            s = ImuSamples("x.txt", "csv", np.arange(n) / 100.0, a, g, None, None, 100.0)
+            with pytest.raises(ImuFileError) as e:
+                imu.check_units(s)
+                imu.check_usable(s)
+            out.append(str(e.value))
+        with pytest.raises(ImuFileError) as e:
+            imu_checks.unit_quaternions(Path("x.txt"), q.copy(), str, "q", "")
+        return out + [str(e.value)]
+
+    whole = errors()
+    monkeypatch.setattr(imu, "BLOCK_ROWS", 7)
+    monkeypatch.setattr(imu_checks, "BLOCK_ROWS", 7)
+    assert errors() == whole
+    assert f"sample {row} " in whole[0] and "reaches" in whole[1] and "median" in whole[2]
+    assert "77: q has norm 1.200" in whole[3]
+
+
+@pytest.mark.parametrize("encoding", ["cdr", "json"])
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_mcap_read_in_blocks_is_the_recording(tmp_path, monkeypatch, encoding, shuffled):
+    """imu_mcap makes its arrays BLOCK messages at a time: with blocks of 7 (and messages
+    written out of time order, sorted by the reader) the recording written, to the bit."""
+    from armtrack_cli.session import imu_mcap
+
+    t, acc, gyr, q = _motion()
+    order = np.random.default_rng(5).permutation(t.size) if shuffled else np.arange(t.size)
+    write_imu_mcap(tmp_path / "imu.mcap", t[order] + 0.5, acc[order], gyr[order], q[order],
+                   encoding=encoding)
+    whole = read_imu(tmp_path / "imu.mcap")
+    monkeypatch.setattr(imu_mcap, "BLOCK", 7)
+    s = read_imu(tmp_path / "imu.mcap")
+    for name in ("t", "acc", "gyr", "quat"):
+        np.testing.assert_array_equal(getattr(s, name), getattr(whole, name))
+    np.testing.assert_array_equal(s.acc, acc)
+    np.testing.assert_array_equal(s.gyr, gyr)
+    np.testing.assert_allclose(s.quat, q, atol=1e-12)

@@ -37,7 +37,14 @@ CORPUS = sorted(p for d in ("sample_sessions", "tests/data", "tests/hostile")
 SAMPLES = REPO / "sample_sessions"
 
 
-def _old_parse_rows(path, lines, first, header, delimiter, error, *, skip_prefixes=()):
+def _old_parse_table(*args, groups=None, **kwargs):
+    """The table as it was read before: every column, whatever groups the reader asks for."""
+    tab = ref.parse_table(*args, **kwargs)
+    return text_table.TextTable(tab.header, tab.data, tab.line_of, tab.notes)
+
+
+def _old_parse_rows(path, lines, first, header, delimiter, error, *, skip_prefixes=(),
+                    groups=None):
     """qualisys' header-less table as it was read before: a made-up header line in front."""
     tab = ref.parse_table(path, ["\t".join(header)] + list(lines[first:]), 0, delimiter, error,
                           skip_prefixes=skip_prefixes)
@@ -46,7 +53,7 @@ def _old_parse_rows(path, lines, first, header, delimiter, error, *, skip_prefix
 
 def _use_old_readers(mp) -> None:
     for mod in (xsens, imu_csv, qualisys, vicon, qtm6dof, video):
-        mp.setattr(mod, "parse_table", ref.parse_table)
+        mp.setattr(mod, "parse_table", _old_parse_table)
     mp.setattr(qualisys, "parse_rows", _old_parse_rows)
     mp.setattr(qualisys, "read_text_head", text_table.read_text_lines)
 
@@ -203,6 +210,28 @@ def test_an_empty_cell_is_nan_and_lines_are_counted_across_chunks(tmp_path, monk
     want = np.array([[k, 2 * k, np.nan if k % 7 == 3 else 3 * k] for k in range(100)], float)
     np.testing.assert_array_equal(got.data, want)
     np.testing.assert_array_equal(got.line_of, np.arange(1, 101))
+
+
+@pytest.mark.parametrize("reserve", [numeric_text.RESERVE_BYTES, 0])
+def test_groups_hold_the_tables_columns_and_nothing_else(tmp_path, monkeypatch, reserve):
+    """Read in groups, across chunks read by loadtxt and row by row (an NA cell, empty
+    cells): each group's own contiguous array is those columns of the whole table, and no
+    table is kept."""
+    monkeypatch.setattr(numeric_text, "CHUNK_BYTES", 64)
+    monkeypatch.setattr(numeric_text, "RESERVE_BYTES", reserve)
+    body = "".join(f"{k}\t{'NA' if k == 40 else k * 2}\t{'' if k % 7 == 3 else k * 3}\t"
+                   f"{k % 5}\t{-k}\n" for k in range(100))
+    p = tmp_path / "t.tsv"
+    p.write_text(body)
+    layout = numeric_text.Layout(5, "\t", tuple("abcde"))
+    whole = numeric_text.file_rows(p, 0, layout, DataError)
+    groups = ((4, 0), (2,), (1, 3))
+    got = numeric_text.file_rows(p, 0, layout, DataError, groups=groups)
+    assert got.data is None and np.isnan(whole.data[40, 1]) and np.isnan(whole.data[3, 2])
+    for g, part in zip(groups, got.groups, strict=True):
+        np.testing.assert_array_equal(part, whole.data[:, list(g)])
+        assert part.flags.c_contiguous
+    np.testing.assert_array_equal(got.line_of, whole.line_of)
 
 
 def test_a_bad_cell_is_named_by_line_and_column(tmp_path, monkeypatch):

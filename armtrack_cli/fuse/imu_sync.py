@@ -32,7 +32,10 @@ columns at δ, the rays, their Jacobians and every product are formed CHUNK fram
 (the sums WᵀW, Wᵀy, DᵀW, DᵀD carried across chunks); what is kept whole is ∫a dt and ∫R dt at
 the IMU's samples (96 bytes a sample) and the Jacobians, image velocities and drift rows at the
 frames (about 110 bytes a frame): 45 MB at 60 minutes, where the whole-session temporaries
-peaked near 160 MB (issue 15).
+peaked near 160 MB (issue 15). A declared offset's check on a long session scores only its
+most informative windows (fuse/sync_windows.py): the problem is then cut into stretches
+(SyncProblem.frame_cuts, imu_cuts), each with its own smoothing, drift spline, integrals and
+chain of rays, sharing δ, the scale and the bias; its cost and memory are the windows'.
 
 Missing detections are missing: lost runs up to BRIDGE_S are bridged for the derivative
 only, a window holding a longer loss gives no image velocity; an IMU gap longer than GAP_S
@@ -42,12 +45,11 @@ gives no IMU velocity. Measured in docs/validation-sync.md.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 
 from armtrack_cli.core.bounded_min import bounded_min
-from armtrack_cli.core.curves import bspline_rows, hermite, savgol_coeffs
+from armtrack_cli.core.curves import bspline_rows, hermite
 from armtrack_cli.core.grid_search import coarse_to_fine
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import (
@@ -61,6 +63,7 @@ from armtrack_cli.fuse.drift_ls import (
 )
 from armtrack_cli.fuse.imu_fold import rotation_integral
 from armtrack_cli.fuse.sync_rays import ray_jacobians, wrist_on_rays  # noqa: F401 (tests')
+from armtrack_cli.fuse.sync_signal import bridge, joined, savgol_cut, stretches
 
 WINDOW_S = 0.5  # Savitzky–Golay window (cubic): keeps motion below ~2 Hz
 KNOT_S = 6.0  # s between the drift spline's knots: the gyro-anchored orientation's leak is
@@ -98,28 +101,11 @@ class SyncProblem:
     uv: np.ndarray  # (n, 2) px, NaN = no detection
     proj: models.Projection
     arm: models.Arm | None
-
-
-@lru_cache(maxsize=8)
-def _coeffs(window: int, deriv: int, dt: float) -> np.ndarray:
-    """savgol_coeffs, once per (window, deriv, dt): every δ's columns use the same (read only)."""
-    return savgol_coeffs(window, deriv, dt)
-
-
-def _savgol(x: np.ndarray, window: int, deriv: int, dt: float) -> np.ndarray:
-    """Cubic Savitzky–Golay along axis 0 (odd ``window``); NaN wherever the window holds a NaN
-    or runs off either end."""
-    c = _coeffs(window, deriv, dt)
-    h = window // 2
-    out = np.full(x.shape, np.nan)
-    if x.shape[0] < window:
-        return out
-    m = x.shape[0] - 2 * h
-    acc = out[h:h + m]  # Σ_j c_j x[k − h + j], on views (a NaN in the window stays NaN)
-    acc[...] = c[0] * x[:m]
-    for j in range(1, window):
-        acc += c[j] * x[j:j + m]
-    return out
+    frame_cuts: tuple[int, ...] = ()  # frames where a new stretch starts (a check's windows,
+    #                                  fuse/sync_windows.py): smoothing, bridging and the drift's
+    #                                  spline stop there; () = one stretch
+    imu_cuts: tuple[int, ...] = ()  # IMU samples where a new stretch starts: its integrals
+    #                                (velocity, ∫R dt) start again from zero there
 
 
 @dataclass(frozen=True)
@@ -141,43 +127,32 @@ def _prepare(p: SyncProblem, delta: float, like: _Prepared | None = None) -> _Pr
     if like is not None:
         return replace(like, J=J)
     dt = float(np.median(np.diff(p.t_frames)))
-    window = max(5, int(round(WINDOW_S / dt)) | 1)
-    drift = _spline_basis(p.t_frames)
-    v_imu = np.vstack([np.zeros((1, 3)), np.cumsum(0.5 * (p.a_W[1:] + p.a_W[:-1])
-                                                   * np.diff(p.t_imu)[:, None], axis=0)])
-    return _Prepared(_savgol(_bridge(p.uv, int(round(BRIDGE_S / dt))), window, 1, dt), J, drift,
-                     rotation_integral(p.t_imu, p.q_WB),
-                     v_imu, dt, window)
+    window, most = max(5, int(round(WINDOW_S / dt)) | 1), int(round(BRIDGE_S / dt))
+    frames, samples = stretches(p.frame_cuts, p.t_frames.size), stretches(p.imu_cuts, p.t_imu.size)
+    vel = savgol_cut(joined([bridge(p.uv[a:b], most) for a, b in frames]), p.frame_cuts,
+                      window, 1, dt)
+    v_imu = joined([np.vstack([np.zeros((1, 3)), np.cumsum(
+        0.5 * (p.a_W[a + 1:b] + p.a_W[a:b - 1]) * np.diff(p.t_imu[a:b])[:, None], axis=0)])
+        for a, b in samples])
+    rint = joined([rotation_integral(p.t_imu[a:b], p.q_WB[a:b]) for a, b in samples])
+    return _Prepared(vel, J, _spline_basis(p.t_frames, frames), rint, v_imu, dt, window)
 
 
-def _bridge(x: np.ndarray, most: int) -> np.ndarray:
-    """x (n, d) with runs of at most ``most`` missing rows between two present ones filled
-    linearly (for the derivative only: a lost frame or two must not void a whole window);
-    longer runs stay missing."""
-    ok = np.isfinite(x).all(axis=1)
-    idx = np.flatnonzero(ok)
-    out = x.copy()
-    if idx.size < 2:
-        return out
-    i = np.arange(x.shape[0])
-    nxt = np.clip(np.searchsorted(idx, i), 0, idx.size - 1)
-    prv = np.clip(nxt - 1, 0, idx.size - 1)
-    fill = ~ok & (i > idx[0]) & (i < idx[-1]) & (idx[nxt] - idx[prv] - 1 <= most)
-    for a in range(x.shape[1]):
-        out[fill, a] = np.interp(i[fill], idx, x[idx, a])
-    return out
-
-
-def _spline_basis(t: np.ndarray) -> SplineRows:
-    """(n, m) quartic B-splines, knots KNOT_S apart over t: the integrals of cubic splines
-    (plus a constant), i.e. the velocity drift of a smoothly varying acceleration error."""
-    k = DRIFT_DEGREE
-    inner = np.linspace(t[0], t[-1], max(2, int(np.ceil((t[-1] - t[0]) / KNOT_S)) + 1))
-    knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
-    # k + 1 non-zeros a row, kept as such (fuse/drift_ls.py): dense, a 60-minute session's
-    # basis would be 1.6 GB
-    start, w = bspline_rows(np.clip(t, inner[0], inner[-1]), knots, k)
-    return SplineRows(start, w, knots.size - k - 1)
+def _spline_basis(t: np.ndarray, frames: list[tuple[int, int]]) -> SplineRows:
+    """(n, m) quartic B-splines, knots KNOT_S apart over each stretch of t (``frames``), a
+    stretch's functions its own: the integrals of cubic splines (plus a constant), i.e. the
+    velocity drift of a smoothly varying acceleration error."""
+    k, m, rows = DRIFT_DEGREE, 0, []
+    for a, b in frames:
+        u = t[a:b]
+        inner = np.linspace(u[0], u[-1], max(2, int(np.ceil((u[-1] - u[0]) / KNOT_S)) + 1))
+        knots = np.r_[[inner[0]] * k, inner, [inner[-1]] * k]
+        # k + 1 non-zeros a row, kept as such (fuse/drift_ls.py): dense, a 60-minute
+        # session's basis would be 1.6 GB
+        start, w = bspline_rows(np.clip(u, inner[0], inner[-1]), knots, k)
+        rows.append((start + m, w))
+        m += knots.size - k - 1
+    return SplineRows(joined([r[0] for r in rows]), joined([r[1] for r in rows]), m)
 
 
 def _imu_covers(p: SyncProblem, t: np.ndarray) -> np.ndarray:
@@ -196,7 +171,8 @@ def _lerp(t: np.ndarray, y: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 def columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None)
             ) -> np.ndarray:
-    """W(δ) (k, 2, 4) px/s at the frames ``sl``, smoothed as the image side is: V(δ) = J_k
+    """W(δ) (k, 2, 4) px/s at the frames ``sl``, smoothed as the image side is (within each
+    stretch: SyncProblem.frame_cuts): V(δ) = J_k
     v(t_k − δ), the IMU's integrated velocity at t_k − δ (smooth in δ; NaN outside the
     recording or across a gap longer than GAP_S) projected by J_k (eq. 7's Jacobian: u̇ = J v
     exactly); and J_k ∫R_WB dt per unit accelerometer bias β in B at t_k − δ (eq. 4: a bias
@@ -206,14 +182,17 @@ def columns(p: SyncProblem, pre: _Prepared, delta: float, sl: slice = slice(None
     v[~_imu_covers(p, t)] = np.nan
     at = _lerp(p.t_imu, pre.rint, np.clip(t, p.t_imu[0], p.t_imu[-1]))  # (k, 3, 3)
     W = pre.J[sl] @ np.concatenate([v[:, :, None], at], axis=2)  # (k, 2, 4)
-    return _savgol(W.reshape(-1, 8), pre.window, 0, pre.dt).reshape(-1, 2, 4)
+    a, b, _ = sl.indices(p.t_frames.size)
+    cuts = tuple(k - a for k in p.frame_cuts if a < k < b)
+    return savgol_cut(W.reshape(-1, 8), cuts, pre.window, 0, pre.dt).reshape(-1, 2, 4)
 
 
 def _chunks(p: SyncProblem, pre: _Prepared, delta: float, spans=None):
     """(a, b, W, usable) for CHUNK frames a … b − 1 at a time (or for each (a, b) of ``spans``):
     W (b − a, 2, 4) the IMU's columns at δ, V(δ) and the bias's three, and the frames
     scorable. Each chunk is formed with the smoothing's half window either side, so its values
-    are the whole session's: memory bounded however long the session (issue 15)."""
+    are the whole session's (its stretch's: SyncProblem.frame_cuts): memory bounded however
+    long the session (issue 15)."""
     n, h = p.t_frames.size, pre.window // 2
     for a, b in spans or ((a, min(a + CHUNK, n)) for a in range(0, n, CHUNK)):
         sl = slice(max(a - h, 0), min(b + h, n))
@@ -224,9 +203,10 @@ def _chunks(p: SyncProblem, pre: _Prepared, delta: float, spans=None):
 def _rough_spans(p: SyncProblem, pre: _Prepared) -> list[tuple[int, int]] | None:
     """ROUGH_WINDOWS windows of ROUGH_WINDOW_S, evenly spread over the session, for the
     grid's coarse pass (which only picks the basin; the fine pass and the refinement score
-    every frame); None for a session shorter than ROUGH_MIN_S (all of it is scored)."""
+    every frame); None for a session shorter than ROUGH_MIN_S (all of it is scored), or cut
+    into stretches (a check's windows: already short)."""
     n = p.t_frames.size
-    if p.t_frames[-1] - p.t_frames[0] < ROUGH_MIN_S:
+    if p.frame_cuts or p.t_frames[-1] - p.t_frames[0] < ROUGH_MIN_S:
         return None
     w = int(round(ROUGH_WINDOW_S / pre.dt))
     return [(int(a), int(a) + w) for a in np.linspace(0, n - w, ROUGH_WINDOWS)]
@@ -237,7 +217,7 @@ def _usable(p: SyncProblem, pre: _Prepared, delta: float) -> np.ndarray:
     a detection's velocity, and the IMU covering every frame of the smoothing's window (the
     bias's columns are finite wherever J is: their times are clipped to the recording)."""
     gap = np.where(_imu_covers(p, p.t_frames - delta), 0.0, np.nan)[:, None]
-    covered = np.isfinite(_savgol(gap, pre.window, 0, pre.dt))[:, 0]
+    covered = np.isfinite(savgol_cut(gap, p.frame_cuts, pre.window, 0, pre.dt))[:, 0]
     return covered & np.isfinite(pre.vel_img).all(axis=1) & np.isfinite(pre.J).all(axis=(1, 2))
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.drift_ls import CHUNK
+from armtrack_cli.fuse.sync_signal import stretches
 
 if TYPE_CHECKING:
     from armtrack_cli.fuse.imu_sync import SyncProblem
@@ -38,10 +39,18 @@ def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
     one nearer the table as models.initial_wrist takes it (a grazing ray's choice by nearness
     bounced onto the other sheet for seconds from a sub-frame change of δ), the ray's nearest
     point where it misses; without an arm, at the range of the first detection's start. NaN
-    without a detection."""
-    det = np.flatnonzero(np.isfinite(p.uv).all(axis=1))
-    c = p.proj.eye
+    without a detection. A stretch of the problem (SyncProblem.frame_cuts: a check's window)
+    starts its own chain, as the session's first detection does."""
     out = np.full((p.uv.shape[0], 3), np.nan)
+    for start, end in stretches(p.frame_cuts, p.uv.shape[0]):  # each its own chain
+        _chain(p, delta, start + np.flatnonzero(np.isfinite(p.uv[start:end]).all(axis=1)),
+               out)
+    return out
+
+
+def _chain(p: SyncProblem, delta: float, det: np.ndarray, out: np.ndarray) -> None:
+    """wrist_on_rays for the detections ``det`` (frames in order, one stretch), into ``out``."""
+    c = p.proj.eye
     prev = None
     for a in range(0, det.size, CHUNK):
         k = det[a:a + CHUNK]
@@ -64,7 +73,6 @@ def wrist_on_rays(p: SyncProblem, delta: float) -> np.ndarray:
                 prev = a if abs(a - prev) <= abs(b - prev) else b
             s[i] = prev  # (Python floats: the chain's choice is sequential)
         out[k] = c + s[:, None] * d
-    return out
 
 
 def _jacobians(proj: models.Projection, pts: np.ndarray, h: float = 1e-5) -> np.ndarray:

@@ -15,18 +15,13 @@ from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.threads import Done, Lazy, Then
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.imu_sync import ImuOffset, SyncProblem, estimate_imu_offset
+from armtrack_cli.fuse.sync_windows import check_windows
 
 AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
 CHECK_SEARCH_S = 0.5  # a declared offset is checked within ±0.5 s of itself
 WARN_FLOOR_S = 0.05  # … and warned about beyond 3 SD and beyond this: the estimator's own
 #                      error stays within 10 ms on the simulated tasks, but a real session's
 #                      unmodelled errors may not (docs/validation-sync.md)
-
-
-BESIDE_MAX_SAMPLES = 120_000  # a declared offset's check runs on a second thread, beside the
-#                              filter, for an IMU of at most this many samples (a 10-minute
-#                              session has 60,000); a longer one's check runs first, alone, so
-#                              that its arrays and the filter's do not peak together (issue 15)
 
 
 def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndarray,
@@ -38,7 +33,9 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
     t_frames, uv: the detections on the session clock (NaN = none). With ``beside``, a
     declared offset's check (which cannot change the offset used, only warn) runs on a second
     thread while the caller goes on (core/threads.py); its warning comes with ``result()``,
-    on the caller's thread."""
+    on the caller's thread. The check scores a long session's most informative windows
+    (fuse/sync_windows.py): its cost and memory do not grow with the session, so it runs
+    beside however long the session."""
     declared = session.sync.imu_offset_s != "auto"
     centre = float(session.sync.imu_offset_s) if declared else 0.0
     if declared and session.arm is not None and session.arm.auto:
@@ -49,7 +46,8 @@ def resolve_imu_offset(session, imu_file: Path, t_imu: np.ndarray, q_WB: np.ndar
     problem = SyncProblem(t_imu, a_W, q_WB, t_frames, uv, proj, arm)
     search = CHECK_SEARCH_S if declared else AUTO_SEARCH_S
     if declared:
-        if beside and t_imu.size <= BESIDE_MAX_SAMPLES:
+        problem = check_windows(problem, centre, search)  # here: the whole arrays let go
+        if beside:
             return centre, Then(Lazy(estimate_imu_offset, problem, centre_s=centre,
                                      search_s=search), partial(_judged, imu_file, centre))
         return centre, Done(_judged(imu_file, centre, estimate_imu_offset(

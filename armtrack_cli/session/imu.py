@@ -19,6 +19,7 @@ from armtrack_cli.session.files import regular_file
 from armtrack_cli.session.orientation import estimate_orientation
 from armtrack_cli.session.text_head import read_text_head
 
+BLOCK_ROWS = 65_536  # the checks' temporaries: this many samples at a time (issue 15)
 FORMATS = "Xsens MT Manager export, Xsens DOT CSV, generic CSV (t,ax,ay,az,gx,gy,gz) or MCAP"
 
 
@@ -108,9 +109,11 @@ def check_usable(s: ImuSamples) -> None:
                            "estimate it from the gyroscope and accelerometer")
     for name, arr, bound, unit in (("accelerometer", s.acc, MAX_ACCEL_M_S2, "m/s² (±16 g)"),
                                    ("gyroscope", s.gyr, MAX_GYRO_RAD_S, "rad/s")):
-        big = np.abs(np.nan_to_num(arr, nan=0.0)) > bound
-        if big.any():
-            k, ax = np.argwhere(big)[0]
+        for a in range(0, arr.shape[0], BLOCK_ROWS):  # a block at a time: no copy of arr
+            big = np.abs(arr[a:a + BLOCK_ROWS]) > bound  # (NaN is not beyond it)
+            if not big.any():
+                continue
+            k, ax = np.argwhere(big)[0] + (a, 0)
             raise ImuFileError(path, f"sample {k} (t = {s.t[k]:.3f} s): {name} {'xyz'[ax]} reads "
                                f"{arr[k, ax]:.4g}, beyond the {bound:g} {unit} a wrist IMU measures",
                                "the row is damaged: delete it (it becomes a gap)")
@@ -122,14 +125,16 @@ def check_usable(s: ImuSamples) -> None:
 def check_units(s: ImuSamples) -> None:
     """Refuse values no wrist IMU in SI units produces, saying which unit they look like."""
     path = Path(s.path)
-    g = np.abs(s.gyr[np.isfinite(s.gyr)])
-    if g.size and g.max() > MAX_GYRO_RAD_S:
-        raise ImuFileError(path, f"gyroscope reaches {g.max():.0f}, more than the 35 rad/s "
+    g = max((np.abs(b[np.isfinite(b)]).max(initial=-1.0) for b in _blocks(s.gyr)),
+            default=-1.0)  # the largest finite |rate|, a block of rows at a time
+    if g > MAX_GYRO_RAD_S:
+        raise ImuFileError(path, f"gyroscope reaches {g:.0f}, more than the 35 rad/s "
                            "(2000 °/s) any MEMS gyro measures",
                            "the values look like degrees per second; armtrack expects rad/s")
     rows = np.isfinite(s.acc).all(axis=1)
     if rows.sum() >= 10:
-        mag = np.linalg.norm(s.acc[rows], axis=1)
+        mag = np.concatenate([np.linalg.norm(b[r], axis=1) for b, r in
+                              zip(_blocks(s.acc), _blocks(rows))])
         med = float(np.median(mag))
         if med < 3.0:
             raise ImuFileError(path, f"accelerometer magnitude is {med:.2f} on median; a worn "
@@ -138,3 +143,8 @@ def check_units(s: ImuSamples) -> None:
         if med > 40.0:
             raise ImuFileError(path, f"accelerometer magnitude is {med:.0f} on median; a worn "
                                "sensor reads about 9.81 m/s²", "are the values in m/s²?")
+
+
+def _blocks(x: np.ndarray):
+    """x's rows BLOCK_ROWS at a time (views)."""
+    return (x[a:a + BLOCK_ROWS] for a in range(0, x.shape[0], BLOCK_ROWS))

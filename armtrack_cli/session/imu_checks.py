@@ -8,24 +8,27 @@ from pathlib import Path
 
 import numpy as np
 
-from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.core.streams import time_gaps
 
 NORM_TOLERANCE = 0.05
+BLOCK_ROWS = 65_536  # temporaries of this many rows at a time (issue 15)
 
 
 def unit_quaternions(path: Path, q: np.ndarray, where: Callable[[int], str], what: str,
                      hint: str) -> np.ndarray:
-    """Normalised q; an error naming the first row whose norm is off by more than 5 %
-    (a mislabelled or scaled column, not round-off). NaN rows stay NaN."""
+    """q normalised in place (the reader's own array, no copy of a long recording: issue 15)
+    and returned, as quat.normalize computes it; an error naming the first row whose norm is
+    off by more than 5 % (a mislabelled or scaled column, not round-off). NaN rows stay NaN."""
+    norm = np.empty(q.shape[0])
     with np.errstate(over="ignore", invalid="ignore"):
-        norm = np.linalg.norm(q, axis=1)
+        for a in range(0, q.shape[0], BLOCK_ROWS):  # its squares a block at a time
+            norm[a:a + BLOCK_ROWS] = np.linalg.norm(q[a:a + BLOCK_ROWS], axis=1)
     bad = np.isfinite(q).all(axis=1) & ~(np.abs(norm - 1.0) <= NORM_TOLERANCE)
     if bad.any():
         r = int(np.flatnonzero(bad)[0])
         raise ImuFileError(path, f"{where(r)}: {what} has norm {norm[r]:.3f}, not 1", hint)
-    return quat.normalize(q)
+    return np.divide(q, norm[:, None], out=q)
 
 
 def rate_and_dropped(t: np.ndarray) -> tuple[float, int]:

@@ -12,9 +12,15 @@ import numpy as np
 from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.core.streams import ImuSamples
 from armtrack_cli.session.imu_checks import rate_and_dropped, unit_quaternions
-from armtrack_cli.session.text_table import parse_table, read_text_lines, sniff_delimiter
+from armtrack_cli.session.text_table import (
+    named_groups,
+    parse_table,
+    read_text_lines,
+    sniff_delimiter,
+)
 
 REQUIRED = ("t", "ax", "ay", "az", "gx", "gy", "gz")
+GROUPS = (("t",), ("ax", "ay", "az"), ("gx", "gy", "gz"), ("mx", "my", "mz"), ("qw", "qx", "qy", "qz"))
 
 
 def looks_like_generic_csv(lines: list[str]) -> bool:
@@ -54,7 +60,8 @@ def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSample
         seen = {"\t": "tabs", ";": "semicolons", None: "spaces"}[delim]
         raise ImuFileError(path, f"is separated by {seen}, not commas",
                            "the generic IMU CSV is comma-separated: t,ax,ay,az,gx,gy,gz")
-    tab = parse_table(path, lines, header_at, delim, ImuFileError, skip_prefixes=("#",))
+    tab = parse_table(path, lines, header_at, delim, ImuFileError, skip_prefixes=("#",),
+                      groups=named_groups(*GROUPS))  # only what is returned kept (issue 15)
     names = [h.lower() for h in tab.header]
     missing = [c for c in REQUIRED if c not in names]
     if missing:

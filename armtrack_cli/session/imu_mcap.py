@@ -22,6 +22,9 @@ from armtrack_cli.session.ros2_schema import field_paths, get_path
 MAGIC = b"\x89MCAP0\r\n"
 IMU_SCHEMAS = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")
 TESLA_TO_UT = 1e6  # sensor_msgs/MagneticField is in tesla; armtrack's magnetometer in µT
+BLOCK = 4096  # messages made into arrays at a time
+COLUMNS = ((0,), (1, 2, 3, 4), (5,), (6, 7, 8), (9, 10, 11), (12, 13, 14))  # a row's groups:
+#         stamp, quaternion (w, x, y, z), orientation_covariance[0], gyro, acc[, magnetometer]
 
 
 def open_summary(path: Path, error: type[DataError]):
@@ -88,7 +91,6 @@ def _stamp(msg_header_stamp, log_time_ns: int) -> float:
 def _decode_cdr(reader, topic, field="", mag_field=None):
     from mcap_ros2.decoder import DecoderFactory
 
-    rows = []
     factory = DecoderFactory()
     for schema, channel, message in reader.iter_messages(topics=[topic]):
         decode = factory.decoder_for(channel.message_encoding, schema)
@@ -96,29 +98,27 @@ def _decode_cdr(reader, topic, field="", mag_field=None):
         m = get_path(outer, field)
         o, w, a = m.orientation, m.angular_velocity, m.linear_acceleration
         b = get_path(outer, mag_field).magnetic_field if mag_field else None
-        rows.append((_stamp((m.header.stamp.sec, m.header.stamp.nanosec), message.log_time),
-                     o.w, o.x, o.y, o.z, float(m.orientation_covariance[0]),
-                     w.x, w.y, w.z, a.x, a.y, a.z)
-                    + ((b.x * TESLA_TO_UT, b.y * TESLA_TO_UT, b.z * TESLA_TO_UT) if b else ()))
-    return rows
+        yield ((_stamp((m.header.stamp.sec, m.header.stamp.nanosec), message.log_time),
+                o.w, o.x, o.y, o.z, float(m.orientation_covariance[0]),
+                w.x, w.y, w.z, a.x, a.y, a.z)
+               + ((b.x * TESLA_TO_UT, b.y * TESLA_TO_UT, b.z * TESLA_TO_UT) if b else ()))
 
 
 def _decode_json(reader, topic, path):
-    rows = []
     for _, _, message in reader.iter_messages(topics=[topic]):
         try:
             m = json.loads(message.data)
             st = m.get("header", {}).get("stamp", {})
             o, w, a = m["orientation"], m["angular_velocity"], m["linear_acceleration"]
             cov = m.get("orientation_covariance", [0.0])
-            rows.append((_stamp((st.get("sec", 0), st.get("nanosec", st.get("nsec", 0))),
-                                message.log_time),
-                         o["w"], o["x"], o["y"], o["z"], float(cov[0]),
-                         w["x"], w["y"], w["z"], a["x"], a["y"], a["z"]))
+            row = (_stamp((st.get("sec", 0), st.get("nanosec", st.get("nsec", 0))),
+                          message.log_time),
+                   o["w"], o["x"], o["y"], o["z"], float(cov[0]),
+                   w["x"], w["y"], w["z"], a["x"], a["y"], a["z"])
         except (ValueError, KeyError, TypeError, IndexError) as exc:
             raise ImuFileError(path, f"topic {topic}: a JSON Imu message is malformed "
                                f"({type(exc).__name__}: {exc})") from None
-    return rows
+        yield row
 
 
 def _schemas(reader, path: Path) -> dict[str, tuple[str, str, str]]:
@@ -186,42 +186,77 @@ def read_mcap_imu(path: Path, *, topic: str | None = None, field: str | None = N
         if field and encoding != "cdr":
             raise ImuFileError(path, f"topic {topic}: [imu] field is read from CDR (ROS 2) "
                                f"messages only, not {encoding!r}")
+        if encoding not in ("cdr", "json"):
+            raise ImuFileError(path, f"topic {topic} uses message encoding {encoding!r}",
+                               "armtrack reads cdr (ROS 2) and json")
         try:
-            rows = (_decode_cdr(reader, topic, field, mag_field) if encoding == "cdr"
-                    else _decode_json(reader, topic, path) if encoding == "json" else None)
+            cols = _columns(_decode_cdr(reader, topic, field, mag_field) if encoding == "cdr"
+                            else _decode_json(reader, topic, path))
         except ImuFileError:
             raise
         except Exception as exc:
             raise ImuFileError(path, f"topic {topic}: messages cannot be decoded "
                                f"({type(exc).__name__}: {exc})") from None
-        if rows is None:
-            raise ImuFileError(path, f"topic {topic} uses message encoding {encoding!r}",
-                               "armtrack reads cdr (ROS 2) and json")
     finally:
         f.close()
-    if not rows:
+    if cols is None:
         raise ImuFileError(path, f"topic {topic} has no messages")
-    a = np.array(rows, dtype=float)
-    order = np.argsort(a[:, 0], kind="stable")
-    a = a[order]
-    t = a[:, 0] - a[0, 0]
+    stamp = cols[0][:, 0]
+    if (np.diff(stamp) < 0).any():  # out of time order: sorted (stably; in order, as it is)
+        order = np.argsort(stamp, kind="stable")
+        cols = [c[order] for c in cols]
+        stamp = cols[0][:, 0]
+    t = stamp - stamp[0]
     if (np.diff(t) <= 0).any():
         r = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1
         raise ImuFileError(path, f"topic {topic}: message {r} repeats the time stamp of the one "
                            "before it")
-    q = a[:, 1:5]  # ROS (x, y, z, w) was reordered to (w, x, y, z) when decoding
-    has_q = a[:, 5] != -1.0
+    q = cols[1]  # ROS (x, y, z, w) was reordered to (w, x, y, z) when decoding
+    has_q = cols[2][:, 0] != -1.0
     notes: list[str] = [f"topic {topic}" + (f", field {field}" if field else "")]
-    mag = a[:, 12:15] if a.shape[1] >= 15 else None
+    mag = cols[5] if len(cols) > 5 else None
     if mag is not None:
         notes.append(f"magnetometer from field {mag_field} (T -> µT)")
     if not has_q.any():
         q = None
     else:
-        q = q.copy()
         q[~has_q] = np.nan
         q = unit_quaternions(path, q, lambda r: f"topic {topic}: message {r}", "orientation",
                              "set orientation_covariance[0] = -1 when there is no orientation")
     rate, dropped = rate_and_dropped(t)
-    return ImuSamples(str(path), "mcap", t, a[:, 9:12], a[:, 6:9], mag, q, rate, dropped,
+    return ImuSamples(str(path), "mcap", t, cols[4], cols[3], mag, q, rate, dropped,
                       "file" if q is not None else "none", tuple(notes))
+
+
+def _columns(rows) -> list[np.ndarray] | None:
+    """The decoded rows' columns, each group of COLUMNS in an array of its own (stamp,
+    quaternion, covariance[0], gyro, accelerometer[, magnetometer]), made BLOCK rows at a
+    time: no Python tuple per message held (a 60-minute recording's took 250 MB; issue 15),
+    nothing kept that is not returned. None without rows."""
+    parts: list[list[np.ndarray]] = []
+    block: list[tuple] = []
+    for row in rows:
+        block.append(row)
+        if len(block) == BLOCK:
+            _add(parts, block)
+    _add(parts, block)
+    if not parts:
+        return None
+    out = []
+    for p in parts:  # group by group: its blocks let go as it is joined
+        out.append(p[0] if len(p) == 1 else np.concatenate(p))
+        p.clear()
+    return out
+
+
+def _add(parts: list[list[np.ndarray]], block: list[tuple]) -> None:
+    """The block's rows (cleared) as arrays, one per group of COLUMNS, onto ``parts``."""
+    if not block:
+        return
+    a = np.array(block, dtype=float)
+    block.clear()
+    groups = [g for g in COLUMNS if g[-1] < a.shape[1]]
+    if not parts:
+        parts.extend([] for _ in groups)
+    for p, g in zip(parts, groups, strict=True):
+        p.append(a[:, g[0]:g[-1] + 1].copy())

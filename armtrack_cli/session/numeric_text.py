@@ -11,6 +11,7 @@ Qualisys, Vicon, video time stamps) and plain_tables (armtrack's own trajectory 
 from __future__ import annotations
 
 import io
+import mmap
 import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -20,9 +21,11 @@ import numpy as np
 
 from armtrack_cli.core.errors import DataError
 
-CHUNK_BYTES = 1 << 22  # 4 MB of text a chunk (~40,000 rows of an IMU export): a few MB held
-CHUNK_LINES = 40_000  # the same for lines already in memory
-RESERVE_BYTES = 1 << 30  # np.empty's pages past the rows read are never touched nor resident
+CHUNK_BYTES = 1 << 20  # 1 MB of text a chunk (~10,000 rows of an IMU export): its bytes,
+#                        their copies and loadtxt's rows held at once (4 MB held ~20 MB more
+#                        at the peak, no faster: 1.1 s for a 60-minute IMU or Qualisys export)
+CHUNK_LINES = 10_000  # the same for lines already in memory
+RESERVE_BYTES = 1 << 30  # _reserve's pages past the rows read are never touched nor resident
 MISSING_TOKENS = frozenset({"", "nan", "na", "n/a", "null", "-nan"})
 FAST_DELIMITERS = ("\t", ",", ";", None)  # what loadtxt splits as the row-by-row parse does
 SEPARATOR = {"\t": "tab", ",": "comma", ";": "semicolon", " ": "space", None: "space"}
@@ -36,11 +39,14 @@ class Irregular(Exception):
 
 @dataclass(frozen=True)
 class Rows:
-    """data (N, n) float64, NaN = missing; line_of (N,) the 1-based file line of each row."""
+    """data (N, n) float64, NaN = missing; line_of (N,) the 1-based file line of each row.
+    Read in ``groups`` (read_rows): data is None and groups[i] (N, len(groups[i])) holds
+    those columns, each group its own contiguous array."""
 
-    data: np.ndarray
+    data: np.ndarray | None
     line_of: np.ndarray
     notes: tuple[str, ...] = ()
+    groups: tuple[np.ndarray, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -55,23 +61,25 @@ class Layout:
 
 
 def file_rows(path: Path, first_line: int, layout: Layout, error: type[DataError], *,
-              by_row: bool = True) -> Rows:
+              by_row: bool = True, groups: tuple[tuple[int, ...], ...] | None = None) -> Rows:
     """The rows from line ``first_line`` (0-based) of the file to its end, streamed."""
     most = Path(path).stat().st_size // max(layout.n, 2) + 1  # a row takes n bytes at least
     if most * (layout.n + 1) * 8 > RESERVE_BYTES:  # beyond any session: the rows counted
         with open(path, "rb") as f:
             blocks = iter(lambda: f.read(CHUNK_BYTES), b"")
             most = sum(b.count(b"\n") + b.count(b"\r") for b in blocks) + 1
-    return read_rows(_file_chunks(path, first_line), most, layout, path, error, by_row=by_row)
+    return read_rows(_file_chunks(path, first_line), most, layout, path, error, by_row=by_row,
+                     groups=groups)
 
 
 def line_rows(path: Path, lines: list[str], first_line: int, layout: Layout,
-              error: type[DataError], *, by_row: bool = True) -> Rows:
+              error: type[DataError], *, by_row: bool = True,
+              groups: tuple[tuple[int, ...], ...] | None = None) -> Rows:
     """The rows from lines[first_line:] (a file's lines, 0-based), in chunks of CHUNK_LINES."""
     chunks = ((("\n".join(lines[k:k + CHUNK_LINES]) + "\n").encode(), k + 1,
                len(lines[k:k + CHUNK_LINES])) for k in range(first_line, len(lines), CHUNK_LINES))
     return read_rows(chunks, max(len(lines) - first_line, 0), layout, path, error,
-                     by_row=by_row)
+                     by_row=by_row, groups=groups)
 
 
 def _file_chunks(path: Path, first_line: int) -> Iterator[tuple[bytes, int, int]]:
@@ -111,12 +119,16 @@ def _decode(raw: bytes) -> str:
 
 
 def read_rows(chunks: Iterable[tuple[bytes, int, int]], most: int, layout: Layout, path: Path,
-              error: type[DataError], *, by_row: bool = True) -> Rows:
+              error: type[DataError], *, by_row: bool = True,
+              groups: tuple[tuple[int, ...], ...] | None = None) -> Rows:
     """Every row of ``chunks`` ((text, 1-based line of its first line, lines), at most ``most``
-    rows in all), into one array filled in place. ``by_row=False``: a chunk that is not plain
-    numbers raises Irregular instead of being read row by row."""
-    data = np.empty((most, layout.n))
-    line_of = np.empty(most, dtype=np.int64)
+    rows in all), into one array filled in place; with ``groups`` (tuples of column indices),
+    into one array per group and no other column kept: what a reader keeps is all that is
+    held, no table beside it (issue 15). ``by_row=False``: a chunk that is not plain numbers
+    raises Irregular instead of being read row by row."""
+    parts = [_reserve((most, len(g))) for g in groups] if groups is not None else None
+    data = _reserve((most, layout.n)) if parts is None else None
+    line_of = _reserve((most,), np.int64)
     notes: list[str] = []
     k = 0
     for (text, first, lines), last in _marked_last(chunks):
@@ -128,14 +140,30 @@ def read_rows(chunks: Iterable[tuple[bytes, int, int]], most: int, layout: Layou
             notes += note
         else:
             at = np.arange(first, first + len(got))
-        data[k:k + len(got)] = got
+        if parts is None:
+            data[k:k + len(got)] = got
+        else:
+            for part, g in zip(parts, groups):
+                np.take(got, g, axis=1, out=part[k:k + len(got)], mode="clip")  # unbuffered
         line_of[k:k + len(got)] = at
         k += len(got)
     if not k:
         if not by_row:
             raise Irregular
         raise error(path, "has a column header but no data rows (truncated?)")
-    return Rows(data[:k], line_of[:k], tuple(notes))
+    return Rows(None if data is None else data[:k], line_of[:k], tuple(notes),
+                tuple(p[:k] for p in parts or ()))
+
+
+def _reserve(shape: tuple[int, ...], dtype=np.float64) -> np.ndarray:
+    """An array of ``shape`` on a private anonymous mapping of its own (RssAnon, as np.empty's
+    pages are): only the pages written become resident, as with np.empty, but without numpy's
+    transparent-huge-page advice for arrays of 4 MB or more, under which each array's last
+    written page faulted in a whole 2 MB (a reader's six arrays: up to 12 MB more than they
+    hold; a 10-minute IMU read peaked 37 MB, 30 without). Freed with its last view."""
+    size = int(np.prod(shape))
+    buf = mmap.mmap(-1, max(size * np.dtype(dtype).itemsize, 1), flags=mmap.MAP_PRIVATE)
+    return np.frombuffer(buf, dtype=dtype, count=size).reshape(shape)
 
 
 def _marked_last(chunks: Iterable[tuple[bytes, int, int]]

@@ -65,27 +65,25 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
         raise GroundTruthError(path, "has a header but no data (truncated export?)")
     m = len(names)
     has_row = lines[at].split("\t")[0].strip().lower() == "frame"
+
+    def groups(header: list[str]) -> tuple[tuple[int, ...], ...]:
+        """The frame and time columns and the coordinates', each read into its own array:
+        the table itself is not kept (issue 15)."""
+        frame, time, first = _layout(header, has_row, m)
+        return tuple((c,) for c in (frame, time) if c is not None) + (
+            tuple(range(max(first, 0), len(header))),)
+
     if has_row:
-        tab = parse_table(path, lines, at, "\t", GroundTruthError)
-        cols = [h.lower() for h in tab.header]
-        frame_col = cols.index("frame") if "frame" in cols else None
-        time_col = cols.index("time") if "time" in cols else None
-        first = len([c for c in (frame_col, time_col) if c is not None])
+        tab = parse_table(path, lines, at, "\t", GroundTruthError, groups=groups)
     else:
         fake = [f"c{k}" for k in range(len(lines[at].rstrip("\t\r\n").split("\t")))]
-        tab = parse_rows(path, lines, at, fake, "\t", GroundTruthError)
-        n = tab.data.shape[1]
-        first = n - 3 * m
-        if first not in (0, 1, 2):
-            raise GroundTruthError(path, f"line {at + 1} has {n} columns, which does not fit "
-                                   f"{m} markers (MARKER_NAMES) x 3 coordinates",
-                                   "is MARKER_NAMES complete?")
-        frame_col = 0 if first >= 1 else None
-        time_col = 1 if first == 2 else None
-    coords = tab.data[:, first:]
-    if coords.shape[1] != 3 * m:
-        raise GroundTruthError(path, f"has {coords.shape[1]} coordinate columns for {m} markers "
-                               f"(expected {3 * m})", "is MARKER_NAMES complete?")
+        tab = parse_rows(path, lines, at, fake, "\t", GroundTruthError, groups=groups)
+    frame_col, time_col, first = _layout(tab.header, has_row, m)
+    if not has_row and first not in (0, 1, 2):
+        raise GroundTruthError(path, f"line {at + 1} has {len(tab.header)} columns, which does "
+                               f"not fit {m} markers (MARKER_NAMES) x 3 coordinates",
+                               "is MARKER_NAMES complete?")
+    coords = tab.block(tuple(range(first, len(tab.header))))
     far = (coords > MAX_MARKER_MM) | (coords < -MAX_MARKER_MM)  # ±inf too; NaN (a gap) not
     if far.any():
         r, k = np.argwhere(far)[0]
@@ -94,7 +92,7 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
                                "the row is damaged: empty its cells (a gap)")
     t = _times(path, tab, time_col, frame_col, freq, coords.shape[0]).copy()
     coords *= MM  # in place (as (N, 3M): a (N, M, 3) view would be copied to multiply)
-    xyz = coords.reshape(-1, m, 3)  # a view of the table's columns: no copy of a long session
+    xyz = coords.reshape(-1, m, 3)  # a view of the coordinates' own array: no copy
     xyz[np.all(xyz == 0.0, axis=2)] = np.nan  # QTM writes gaps as zeros in some versions
     xyz[np.any(np.isnan(xyz), axis=2)] = np.nan
     notes = list(tab.notes)
@@ -104,14 +102,26 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     return MarkerTrajectories(str(path), t, names, xyz, freq, tuple(notes))
 
 
+def _layout(header: list[str], has_row: bool, m: int) -> tuple[int | None, int | None, int]:
+    """The frame and time columns (None: absent) and the first coordinate's: named in a
+    ``Frame Time …`` row, else told by the columns beyond the M markers' 3 M."""
+    if has_row:
+        low = [h.lower() for h in header]
+        frame = low.index("frame") if "frame" in low else None
+        time = low.index("time") if "time" in low else None
+        return frame, time, len([c for c in (frame, time) if c is not None])
+    first = len(header) - 3 * m
+    return 0 if first >= 1 else None, 1 if first == 2 else None, first
+
+
 def _times(path: Path, tab, time_col: int | None, frame_col: int | None, freq: float,
            n: int) -> np.ndarray:
     """Frame times (s from the first frame): the Time column, else Frame / FREQUENCY, else
     row / FREQUENCY; checked to be finite, increasing and ticking at FREQUENCY."""
     if time_col is not None:
-        t = tab.data[:, time_col]
+        t = tab.block((time_col,))[:, 0]
     elif frame_col is not None:
-        t = (tab.data[:, frame_col] - 1) / freq
+        t = (tab.block((frame_col,))[:, 0] - 1) / freq
     else:
         t = np.arange(n) / freq
     if not np.isfinite(t).all():

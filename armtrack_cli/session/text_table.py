@@ -7,7 +7,8 @@ become NaN (missing); any other non-numeric cell is an error naming its line and
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -22,15 +23,24 @@ from armtrack_cli.session.numeric_text import (  # noqa: F401  (split_row: for t
     split_row,
 )
 
+Groups = Callable[[list[str]], tuple[tuple[int, ...], ...]]  # header -> the column groups
+
 
 @dataclass(frozen=True)
 class TextTable:
-    """header: column names; data: (N, C) float64 with NaN; line_of: (N,) 1-based file lines."""
+    """header: column names; data: (N, C) float64 with NaN; line_of: (N,) 1-based file lines.
+    Read in groups (parse_table's ``groups``): data is None and ``groups`` maps each group's
+    column indices to its own (N, k) array, all that was kept of the rows."""
 
     header: list[str]
-    data: np.ndarray
+    data: np.ndarray | None
     line_of: np.ndarray
     notes: tuple[str, ...] = ()
+    groups: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
+
+    @property
+    def n_rows(self) -> int:
+        return int(self.line_of.size)
 
     def index(self, name: str) -> int | None:
         """Column index by case-insensitive name, or None."""
@@ -44,8 +54,29 @@ class TextTable:
         return all(self.index(n) is not None for n in names)
 
     def columns(self, *names: str) -> np.ndarray:
-        """(N, len(names)) array of the named columns."""
-        return self.data[:, [self.index(n) for n in names]]
+        """(N, len(names)) array of the named columns: a group read as such itself (no copy:
+        the reader's to keep or change), else a copy of the table's columns."""
+        return self.block(tuple(self.index(n) for n in names))
+
+    def block(self, idx: tuple[int, ...]) -> np.ndarray:
+        """(N, len(idx)) array of the columns idx: columns() by index."""
+        if idx in self.groups:
+            return self.groups[idx]
+        if self.data is None:
+            raise KeyError(f"columns {idx} were not read (not one of the table's groups)")
+        return self.data[:, list(idx)]
+
+
+def named_groups(*groups: tuple[str, ...], rename: Callable[[str], str] = str) -> Groups:
+    """parse_table's ``groups`` for column names: each group whose names the header (each
+    name through ``rename``) holds, case-insensitively (the first such column, as
+    TextTable.index finds it)."""
+    def pick(header: list[str]) -> tuple[tuple[int, ...], ...]:
+        tab = TextTable([rename(h) for h in header], None, np.empty(0))
+        found = [tuple(tab.index(n) for n in g) for g in groups if tab.has(*g)]
+        return tuple(dict.fromkeys(found))  # a group named twice is read once
+
+    return pick
 
 
 def read_text_lines(path: Path, error: type[DataError], what: str) -> list[str]:
@@ -85,29 +116,34 @@ def sniff_delimiter(header: str) -> str | None:
 
 
 def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | None,
-                error: type[DataError], *, skip_prefixes: tuple[str, ...] = ()) -> TextTable:
+                error: type[DataError], *, skip_prefixes: tuple[str, ...] = (),
+                groups: Groups | None = None) -> TextTable:
     """Parse lines[header_at] as the header and the non-blank lines after it as data (not
     those starting with one of ``skip_prefixes``), by session/numeric_text: from ``lines``
     when they are the whole file's, else (a long file's head, session/text_head.py) streamed
     from the file itself. Trailing empty fields (a trailing delimiter) are ignored; a last
     line with too few fields is a truncated write and is dropped with a note; any other
-    ragged row, or a cell that is not a number, is an error naming its line (and column)."""
+    ragged row, or a cell that is not a number, is an error naming its line (and column).
+    With ``groups`` (the header -> tuples of column indices), only those columns are kept,
+    each group in its own array (TextTable.groups)."""
     header = split_row(lines[header_at], delimiter)
     while header and header[-1] == "":
         header.pop()
     if not header:
         raise error(path, f"line {header_at + 1}: the column header is empty")
     return parse_rows(path, lines, header_at + 1, header, delimiter, error,
-                      skip_prefixes=skip_prefixes)
+                      skip_prefixes=skip_prefixes, groups=groups)
 
 
 def parse_rows(path: Path, lines: list[str], first_line: int, header: list[str],
                delimiter: str | None, error: type[DataError], *,
-               skip_prefixes: tuple[str, ...] = ()) -> TextTable:
+               skip_prefixes: tuple[str, ...] = (), groups: Groups | None = None) -> TextTable:
     """The rows from lines[first_line] on (0-based) under the column names ``header``."""
     layout = Layout(len(header), delimiter, tuple(header), tuple(skip_prefixes))
+    idx = groups(list(header)) if groups is not None else None
     if getattr(lines, "whole", True):
-        rows = line_rows(path, lines, first_line, layout, error)
+        rows = line_rows(path, lines, first_line, layout, error, groups=idx)
     else:
-        rows = file_rows(path, first_line, layout, error)
-    return TextTable(list(header), rows.data, rows.line_of, rows.notes)
+        rows = file_rows(path, first_line, layout, error, groups=idx)
+    return TextTable(list(header), rows.data, rows.line_of, rows.notes,
+                     dict(zip(idx or (), rows.groups)))

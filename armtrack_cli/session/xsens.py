@@ -19,6 +19,7 @@ from armtrack_cli.core.streams import ImuSamples
 from armtrack_cli.session.imu_checks import unit_quaternions
 from armtrack_cli.session.text_table import (
     TextTable,
+    named_groups,
     parse_table,
     read_text_lines,
     sniff_delimiter,
@@ -32,6 +33,14 @@ COUNTER_WRAP = 2**16  # PacketCounter is a uint16
 # applies NED/NWU to the local frame only (MTi User Manual, "RotLocal"), so the calibrated
 # data stay in the sensor frame S; ENU and NWU are already z-up and are used as they are.
 Q_NED_TO_ZUP = np.array([0.0, 1.0, 0.0, 0.0])
+_XYZ = ("X", "Y", "Z")
+# the column groups a reader uses (_build): read each into an array of its own, nothing else
+# kept (session/numeric_text.py; issue 15)
+GROUPS = (("PacketCounter",), ("SampleTimeFine",),
+          *(tuple(f"{g}_{a}" for a in _XYZ) for g in ("Acc", "FreeAcc", "Gyr", "Mag", "Euler")),
+          ("Quat_q0", "Quat_q1", "Quat_q2", "Quat_q3"), ("Quat_W", "Quat_X", "Quat_Y", "Quat_Z"),
+          tuple(f"Mat[{i}][{j}]" for i in (1, 2, 3) for j in (1, 2, 3)),
+          ("Roll", "Pitch", "Yaw"))
 _HEADER_HINTS = ("packetcounter", "sampletimefine", "acc_x", "quat_q0", "quat_w", "freeacc_x")
 
 
@@ -60,8 +69,10 @@ def _vec(tab: TextTable, names: list[str]) -> np.ndarray | None:
 
 def _unwrap(v: np.ndarray, wrap: int) -> np.ndarray:
     """Counts that wrap at ``wrap``, made monotonic; differences taken modulo wrap."""
-    d = np.mod(np.diff(v), wrap)
-    return np.concatenate([[0.0], np.cumsum(d)])
+    out = np.empty(v.shape[0])
+    out[0] = 0.0
+    np.cumsum(np.mod(np.diff(v), wrap), out=out[1:])  # no copy of the sum (issue 15)
+    return out
 
 
 def _header_rate(path: Path, i: int, text: str) -> float:
@@ -123,7 +134,8 @@ def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float 
             raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine steps back or "
                                f"repeats ({int(stf[r - 1, 0])} then {int(stf[r, 0])})",
                                "rows are out of order or the file mixes recordings")
-        t = _unwrap(stf[:, 0], STF_WRAP) * stf_tick_s
+        t = _unwrap(stf[:, 0], STF_WRAP)
+        t *= stf_tick_s
         per_step = np.diff(t) / (steps if steps is not None else 1)
         if per_step.size == 0:  # one sample has no clock rate; read_imu refuses it as too short
             return t, float(header_rate or rate_hz or np.nan), dropped, notes
@@ -143,7 +155,7 @@ def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float 
                            "set [imu] rate_hz in session.toml to the rate it was recorded at")
     if steps is None:
         notes.append("no PacketCounter: dropped samples cannot be detected")
-        return np.arange(tab.data.shape[0]) / rate, rate, 0, notes
+        return np.arange(tab.n_rows) / rate, rate, 0, notes
     return np.concatenate([[0.0], np.cumsum(steps)]) / rate, rate, dropped, notes
 
 
@@ -187,7 +199,7 @@ def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_ra
     if acc is None:
         free = _vec(tab, ["FreeAcc_X", "FreeAcc_Y", "FreeAcc_Z"])
         if free is None or q is None:  # described by info; fuse refuses (imu.require_channels)
-            acc = np.full((tab.data.shape[0], 3), np.nan)
+            acc = np.full((tab.n_rows, 3), np.nan)
             absent.add("Acc")
             notes.append("no accelerometer (Acc_X/Acc_Y/Acc_Z) columns; columns seen: "
                          + ", ".join(tab.header))
@@ -201,8 +213,8 @@ def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_ra
         absent.add("Gyr")
         notes.append("no gyroscope columns" if q is not None else
                      "neither gyroscope (Gyr_X..Z) nor orientation columns")
-    else:
-        gyr = gyr * gyro_scale
+    elif gyro_scale != 1.0:  # the group's own array (TextTable.columns), scaled in place
+        np.multiply(gyr, gyro_scale, out=gyr)
     mag = _vec(tab, ["Mag_X", "Mag_Y", "Mag_Z"])
     for name, arr in (("Acc", acc), ("Gyr", gyr)):
         for k, ax in enumerate("XYZ"):
@@ -238,12 +250,19 @@ def read_mt_manager(path: Path, *, rate_hz: float | None = None,
         raise ImuFileError(path, "has only comment lines: no column header and no data "
                            "(truncated export?)")
     delim = sniff_delimiter(lines[header_at])
-    tab = parse_table(path, lines, header_at, delim, ImuFileError)
-    tab = TextTable([_column_name(h) for h in tab.header], tab.data, tab.line_of, tab.notes)
+    tab = _table(path, lines, header_at, delim)
     if coord != "ENU":
         notes.append(f"coordinate system {coord}")
     return _build(path, tab, "xsens-mt", stf_tick_s=1e-4, header_rate=header_rate,
                   rate_hz=rate_hz, gyro_scale=1.0, coord=coord, notes=notes)
+
+
+def _table(path: Path, lines: list[str], header_at: int, delim: str | None) -> TextTable:
+    """The export's table, its column names without units, only GROUPS' columns kept."""
+    tab = parse_table(path, lines, header_at, delim, ImuFileError,
+                      groups=named_groups(*GROUPS, rename=_column_name))
+    return TextTable([_column_name(h) for h in tab.header], tab.data, tab.line_of, tab.notes,
+                     tab.groups)
 
 
 def _unit(raw: str) -> str:
@@ -267,8 +286,7 @@ def read_dot(path: Path, *, rate_hz: float | None = None,
         raise ImuFileError(path, "is a DOT export (sep= line) without a PacketCounter/"
                            "SampleTimeFine header row")
     raw_header = split_row(lines[header_at], delim)
-    tab = parse_table(path, lines, header_at, delim, ImuFileError)
-    tab = TextTable([_column_name(h) for h in tab.header], tab.data, tab.line_of, tab.notes)
+    tab = _table(path, lines, header_at, delim)
     gyr_units = [_unit(h) for h in raw_header if h.lower().startswith("gyr_")]
     # DOT reports angular rate in deg/s unless the header says rad/s
     gyro_scale = 1.0 if gyr_units and "rad" in gyr_units[0] else np.pi / 180.0
