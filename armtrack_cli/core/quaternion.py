@@ -80,6 +80,12 @@ ROWS_AT_ONCE = 16384  # rotate's rows a chunk at a time: its matrices (n, 3, 3) 
 #                      temporaries are ~150 bytes a row (a 60-minute session's: 17 MB)
 
 
+def row_spans(n: int, size: int = ROWS_AT_ONCE):
+    """(a, b): rows [0, n) ``size`` at a time, for work whose temporaries a row at a time
+    would be session-long (each row's numbers its own)."""
+    return ((a, min(a + size, n)) for a in range(0, n, size))
+
+
 def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """q ⊗ v ⊗ q*: vectors (..., 3) from B into W; (n, 4) rows ROWS_AT_ONCE at a time (the
     same numbers: every row's own)."""
@@ -88,8 +94,7 @@ def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     if n <= ROWS_AT_ONCE or v.ndim > 2 or (v.ndim == 2 and v.shape[0] != n):
         return np.einsum("...ij,...j->...i", to_matrix(q), v)
     out = np.empty((n, 3))
-    for a in range(0, n, ROWS_AT_ONCE):
-        b = min(a + ROWS_AT_ONCE, n)
+    for a, b in row_spans(n):
         out[a:b] = np.einsum("...ij,...j->...i", to_matrix(q[a:b]), v[a:b] if v.ndim == 2 else v)
     return out
 

@@ -107,8 +107,7 @@ def corrected(q_hat: np.ndarray, dtheta: np.ndarray) -> np.ndarray:
     quat.ROWS_AT_ONCE rows at a time (their temporaries, a dozen arrays a row; every row's
     numbers its own)."""
     out = np.empty(q_hat.shape)
-    for a in range(0, q_hat.shape[0], quat.ROWS_AT_ONCE):
-        b = min(a + quat.ROWS_AT_ONCE, q_hat.shape[0])
+    for a, b in quat.row_spans(q_hat.shape[0]):
         ang = np.linalg.norm(dtheta[a:b], axis=1)
         axis = dtheta[a:b] / np.maximum(ang, 1e-300)[:, None]
         out[a:b] = quat.normalize(quat.multiply(quat.from_axis_angle(axis, -ang), q_hat[a:b]))

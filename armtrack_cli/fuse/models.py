@@ -17,20 +17,12 @@ from armtrack_cli.core.streams import CameraModel
 GRAVITY_W = np.array([0.0, 0.0, -9.81])
 
 
-ROTATE_ROWS = 1 << 16  # samples rotated at once: quat.rotate's temporaries (a rotation matrix
-#                       and a dozen columns a sample) bounded however long the recording
-
-
 def accel_world(q_WB: np.ndarray, f_B: np.ndarray) -> np.ndarray:
     """a_W = R_WB f_B + g_W: specific force rotated into W, gravity removed (eq. 4); q_WB
-    (M, 4), f_B (M, 3), a block of samples at a time (the same numbers as all at once)."""
-    if q_WB.ndim != 2 or q_WB.shape[0] <= ROTATE_ROWS:
-        return quat.rotate(q_WB, f_B) + GRAVITY_W
-    out = np.empty(f_B.shape)
-    for lo in range(0, f_B.shape[0], ROTATE_ROWS):
-        out[lo:lo + ROTATE_ROWS] = quat.rotate(q_WB[lo:lo + ROTATE_ROWS],
-                                               f_B[lo:lo + ROTATE_ROWS]) + GRAVITY_W
-    return out
+    (M, 4), f_B (M, 3) (quat.rotate bounds its temporaries however long the recording)."""
+    a_W = quat.rotate(q_WB, f_B)
+    a_W += GRAVITY_W
+    return a_W
 
 
 @dataclass(frozen=True)

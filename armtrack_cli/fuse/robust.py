@@ -99,8 +99,7 @@ def ray_sphere_points(proj, arm, z: np.ndarray, q_WB: np.ndarray,
         return out
     rows = np.flatnonzero(seen)
     d = detection_rays(proj, z)[rows]
-    for a in range(0, rows.size, quat.ROWS_AT_ONCE):  # every row's numbers its own: the
-        b = min(a + quat.ROWS_AT_ONCE, rows.size)     # temporaries a chunk's (issue 15)
+    for a, b in quat.row_spans(rows.size):  # the temporaries a chunk's (issue 15)
         r = rows[a:b]
         c = arm.sphere_centres(q_WB[r]) if centres is None else centres[r]
         near, far, _ = models.ray_sphere(proj.eye, d[a:b], c, arm.L1)
