@@ -45,14 +45,16 @@ TASKS = {"AR1": "reach across", "CR1": "combing hair", "DL1": "drinking (left ha
          "DR1": "drinking", "DR2": "drinking", "FR1": "forward reach", "FR2": "forward reach"}
 
 
-def as_auto(folder: Path, dest: Path) -> Path:
-    """A copy of the session whose [arm] is all "auto" (the video and IMU linked, not copied)."""
+def as_auto(folder: Path, dest: Path,
+            keys: tuple[str, ...] = ("upper_arm_m", "forearm_m", "shoulder_m")) -> Path:
+    """A copy of the session whose [arm] ``keys`` (all three unless told) are "auto" (the
+    video and IMU linked, not copied)."""
     dest.mkdir(parents=True)
     for f in folder.iterdir():
         if f.is_file() and f.name != "session.toml":
             (dest / f.name).symlink_to(f.resolve())
     text = (folder / "session.toml").read_text()
-    for key in ("upper_arm_m", "forearm_m", "shoulder_m"):
+    for key in keys:
         text = re.sub(rf"^{key} = .*$", f'{key} = "auto"', text, flags=re.M)
     (dest / "session.toml").write_text(text)
     return dest
