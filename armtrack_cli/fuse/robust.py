@@ -98,13 +98,14 @@ def ray_sphere_points(proj, arm, z: np.ndarray, q_WB: np.ndarray,
     if not seen.any():
         return out
     rows = np.flatnonzero(seen)
-    d = detection_rays(proj, z)[rows]
+    rays = detection_rays(proj, z)  # (n, 3), its seen rows taken a chunk at a time
     for a, b in quat.row_spans(rows.size):  # the temporaries a chunk's (issue 15)
         r = rows[a:b]
         c = arm.sphere_centres(q_WB[r]) if centres is None else centres[r]
-        near, far, _ = models.ray_sphere(proj.eye, d[a:b], c, arm.L1)
+        d = rays[r]
+        near, far, _ = models.ray_sphere(proj.eye, d, c, arm.L1)
         s = np.maximum(np.stack([near, far], 1), 0.0)  # never behind the camera
-        out[r] = proj.eye + s[:, :, None] * d[a:b, None, :]
+        out[r] = proj.eye + s[:, :, None] * d[:, None, :]
     return out
 
 
