@@ -315,7 +315,7 @@ def repaired(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, 
     sphere of the orientation X corrects; (X repaired in place, the runs moved)."""
     if camera:
         proj = camera_pose.moved(proj, X[:, camera_slice(X.shape[1], False)].mean(axis=0))
-    points = robust.ray_sphere_points(proj, arm, z, corrected(q_hat, X[:, TH]))
+    points = robust.ray_sphere_points(proj, arm, z, lambda: corrected(q_hat, X[:, TH]))
     return branch_repair.repair(X, points, steps, in_place=True)
 
 
