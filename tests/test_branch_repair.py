@@ -185,3 +185,24 @@ def test_the_setting_is_a_boolean():
     assert settings_for(None, ("fuse.branch_repair=false",))[0].branch_repair is False
     with pytest.raises(ConfigError, match="branch_repair"):
         settings_for(None, ("fuse.branch_repair=3",))
+
+
+def test_roots_coded_a_chunk_at_a_time_are_those_of_one_pass(monkeypatch):
+    """roots_of ROOT_ROWS rows at a time (memory, issue 15) gives what one pass over every row
+    gives (the old form), chunk edges falling mid-run, with grazing and unseen frames."""
+    p, roots, *_ = _session()
+    rng = np.random.default_rng(4)
+    q = p + 0.02 * rng.standard_normal(p.shape)
+    q[100:130] = roots[100:130, 1]  # a run on the other root
+    roots = roots.copy()
+    roots[10:14] = np.nan  # unseen
+    roots[50:53, 1] = roots[50:53, 0] + 0.005  # grazing
+    gap = np.linalg.norm(roots[:, 0] - roots[:, 1], axis=1)
+    d = np.linalg.norm(q[:, None, :] - roots, axis=2)
+    whole = np.where(~np.isfinite(gap), branch_repair.UNSEEN,
+                     np.where(gap < branch_repair.MIN_GAP_M, branch_repair.GRAZING,
+                              np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)))
+    monkeypatch.setattr(branch_repair, "ROOT_ROWS", 37)
+    got = branch_repair.roots_of(q, roots)
+    assert got.dtype == whole.dtype and np.array_equal(got, whole)
+    assert {branch_repair.UNSEEN, branch_repair.GRAZING, 0, 1} <= set(got.tolist())

@@ -189,6 +189,42 @@ def test_particle_kernel_equals_the_numpy_reference(scheme, constrained):
         np.testing.assert_allclose(u, v, rtol=0, atol=1e-12 * np.abs(v).max())
 
 
+@pytest.mark.parametrize("constrained", [True, False])
+def test_packed_covariances_are_the_upper_triangles_to_the_bit(constrained):
+    """The kernel's covariances kept as their upper triangles (packed, the arm smoother's
+    first pass) are the whole ones' numbers, and the means the same; unpacked, the whole."""
+    inp, x0, P0, proj, arm = _camera_problem()
+    s = FuseSettings(particles=300, seed=5, pf_resample_ess=1.0 if constrained else 0.6)
+    a = run_particles(inp, x0, P0, proj, s, arm, constrained=constrained, packed=True)
+    b = run_particles(inp, x0, P0, proj, s, arm, constrained=constrained)
+    iu = np.triu_indices(6)
+    assert a.cov.shape == (inp.z.shape[0], 21) and b.cov.shape == (inp.z.shape[0], 6, 6)
+    np.testing.assert_array_equal(a.cov, b.cov[:, iu[0], iu[1]])
+    np.testing.assert_array_equal(gaussian.unpacked(a.cov, 6), b.cov)
+    for u, v in ((a.mean, b.mean), (a.ess, b.ess), (a.codes, b.codes)):
+        np.testing.assert_array_equal(u, v)
+
+
+def test_smoothed_means_from_packed_covariances_are_the_same():
+    """rts_smooth's means-only pass from the upper triangles: the numbers it gives from the
+    whole covariances, bit for bit (in place and not), a block at a time or not."""
+    inp, x0, P0, FbQ = _problem(n_frames=60)
+    x, P = _textbook(inp, x0, P0, FbQ, 16.0 * np.eye(2))
+    P = 0.5 * (P + np.swapaxes(P, 1, 2))  # symmetric to the bit, as the kernels' are
+    iu = np.triu_indices(6)
+    tri = P[:, iu[0], iu[1]]
+    for block in (7, 4096):
+        whole, _ = gaussian.rts_smooth(x, P, steps=inp.steps.stacked, block=block,
+                                       means_only=True, P_add=1e-12 * np.eye(6))
+        packed, none = gaussian.rts_smooth(x.copy(), tri, steps=inp.steps.stacked,
+                                           block=block, means_only=True,
+                                           P_add=1e-12 * np.eye(6), in_place=True)
+        assert none is None
+        np.testing.assert_array_equal(packed, whole)
+    with pytest.raises(ValueError):
+        gaussian.rts_smooth(x, tri, steps=inp.steps.stacked)
+
+
 # ------------------------------------------------------------------------ FilterPy 2.0
 
 def test_one_step_equals_filterpy():

@@ -101,3 +101,26 @@ def test_without_release_the_inputs_keep_their_imu(detected):
     methods.run("arm-smoother", p.inputs, x0, P0, p.projection, s, p.arm)
     assert p.inputs.imu is not None and not p.inputs.release_imu
     assert p.inputs.steps is not None
+
+
+def test_the_gyro_samples_are_freed_before_the_fold(detected, monkeypatch):
+    """The arm smoother lets each of the IMU's arrays go after its last use: the gyroscope's
+    once the orientation track is made, before the fold, so the two are never held together
+    with the whole IMU (fuse@60's peak, issue 15). fuse's outputs are written as before."""
+    imu, at_fold = [], []
+    made, fold = fuse_stage.ImuSamples, arm_smoother.imu_fold.fold
+
+    def imu_samples(*arrays):
+        imu.append([weakref.ref(_root(a)) for a in arrays])
+        return made(*arrays)
+
+    def watched(*a, **k):
+        gc.collect()
+        at_fold.append([r() is not None for r in imu[0]])
+        return fold(*a, **k)
+
+    monkeypatch.setattr(fuse_stage, "ImuSamples", imu_samples)
+    monkeypatch.setattr(arm_smoother.imu_fold, "fold", watched)
+    out = pipeline.fuse(detected)
+    assert out["method"] == "arm-smoother" and Path(out["trajectory"]).exists()
+    assert at_fold == [[True, True, True, False]]  # t, q_WB, f_B still folded; w_B freed

@@ -147,7 +147,9 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
                in_place: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
     """Rauch-Tung-Striebel fixed-interval smoother.
 
-    x (n_steps, n), P (n_steps, n, n): filtered means and covariances; F (n_steps, n, n),
+    x (n_steps, n), P (n_steps, n, n): filtered means and covariances (or, with
+    ``means_only``, P (n_steps, n (n + 1) / 2): their upper triangles row by row, ``unpacked``
+    a block at a time); F (n_steps, n, n),
     b (n_steps, n), Q (n_steps, n, n): the step into k (x_k = F_k x_{k-1} + b_k + w,
     w ~ N(0, Q_k); index 0 unused). The predictions and gains depend only on filtered values,
     so they are computed for ``block`` steps at once (memory stays flat with the length):
@@ -163,13 +165,15 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
     """
     if steps is None:
         steps = lambda lo, hi: (F[lo:hi], b[lo:hi], Q[lo:hi])  # noqa: E731
+    if P.ndim == 2 and not means_only:
+        raise ValueError("packed covariances (upper triangles) give the smoothed means alone")
     xs, Ps = x if in_place else x.copy(), None if means_only else P + P_add
     for stop in range(x.shape[0] - 1, 0, -block):  # steps k in [start, stop), backwards
         start = max(0, stop - block)
         Fn, bn, Qn = steps(start + 1, stop + 1)
         FnT = np.swapaxes(Fn, 1, 2)
         xp = np.einsum("kij,kj->ki", Fn, x[start:stop]) + bn
-        Pb = P[start:stop] + P_add
+        Pb = unpacked(P[start:stop], x.shape[1]) + P_add
         Pp = Fn @ Pb @ FnT + Qn
         gain = np.swapaxes(np.linalg.solve(np.swapaxes(Pp, 1, 2),
                                            np.swapaxes(Pb @ FnT, 1, 2)), 1, 2)
@@ -181,3 +185,15 @@ def rts_smooth(x: np.ndarray, P: np.ndarray, F: np.ndarray | None = None,
             Pk = Pb[j] + gain[j] @ (Ps[k + 1] - Pp[j]) @ gain[j].T
             Ps[k] = 0.5 * (Pk + Pk.T)
     return xs, Ps
+
+
+def unpacked(tri: np.ndarray, n: int) -> np.ndarray:
+    """(m, n, n) symmetric matrices from their upper triangles tri (m, n (n + 1) / 2), row by
+    row (np.triu_indices(n)'s order); full ones (m, n, n) as they are."""
+    if tri.ndim == 3:
+        return tri
+    iu = np.triu_indices(n)
+    out = np.empty((tri.shape[0], n, n))
+    out[:, iu[0], iu[1]] = tri
+    out[:, iu[1], iu[0]] = tri
+    return out

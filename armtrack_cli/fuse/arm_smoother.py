@@ -222,12 +222,16 @@ def run(imu: ImuSamples | list, t_frames: np.ndarray, z: np.ndarray, q_hat: np.n
     imu, first = _given(imu), _given(first)
     shoulder = np.asarray(arm.shoulder, float) if s.shoulder == "drifting" else None
     m_pre, t_frames, z, q_hat, first = pre_roll(imu, t_frames, z, q_hat, first, s)
-    fd = imu_fold.fold(imu.t, imu.q_WB, imu.f_B, t_frames, hold=s.imu_hold)
     period = float(np.median(np.diff(imu.t)))
     gyro = s.orientation_model == "gyro" and imu.gyro()
-    track = imu_fold.orientation_track(imu.t, imu.q_WB, imu.w_B, t_frames) if gyro else None
     still = resting(imu, t_frames, z, s, m_pre)
-    del imu  # folded: what the iterations need of it is fd, track and still
+    t_imu, q_imu, f_B, w_B = imu.t, imu.q_WB, imu.f_B, imu.w_B
+    del imu  # what the iterations need of it is track, fd and still: each of its arrays let
+    #          go after its last use, the gyro's before the fold (fuse@60's peak, issue 15)
+    track = imu_fold.orientation_track(t_imu, q_imu, w_B, t_frames) if gyro else None
+    del w_B
+    fd = imu_fold.fold(t_imu, q_imu, f_B, t_frames, hold=s.imu_hold)
+    del t_imu, q_imu, f_B
     camera = s.camera_pose == "board" and proj.pose_cov is not None
     m0, Pm0 = prior(x0, P0, s, shoulder, gyro, proj.pose_cov if camera else None)
     start = [np.zeros((t_frames.size, m0.size))]  # _iterate's to let go
@@ -311,7 +315,7 @@ def repaired(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, 
     sphere of the orientation X corrects; (X repaired in place, the runs moved)."""
     if camera:
         proj = camera_pose.moved(proj, X[:, camera_slice(X.shape[1], False)].mean(axis=0))
-    points = robust.ray_sphere_points(proj, arm, z, corrected(q_hat, X[:, TH]))
+    points = robust.ray_sphere_points(proj, arm, z, lambda: corrected(q_hat, X[:, TH]))
     return branch_repair.repair(X, points, steps, in_place=True)
 
 

@@ -42,6 +42,7 @@ RATIO = 0.8  # move a run when the other root's residual is below this times its
 MIN_FRAMES = 3  # shorter runs are left alone (a frame or two the next iteration decides)
 PATH_BLOCK = 1024  # a window's steps built at a time (window_path)
 GRAZING, UNSEEN = -1, -2  # roots_of's codes: roots nearer than MIN_GAP_M, no detection
+ROOT_ROWS = 8192  # frames roots_of codes at a time
 
 # steps(lo, hi) -> (F (hi − lo, d, d), b (hi − lo, d)): the process steps into frames lo … hi − 1
 Steps = Callable[[int, int], tuple[np.ndarray, np.ndarray]]
@@ -50,11 +51,17 @@ Steps = Callable[[int, int], tuple[np.ndarray, np.ndarray]]
 def roots_of(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M) -> np.ndarray:
     """(n,) the root (0, 1) nearer each position p (n, 3) where the roots points (n, 2, 3)
     are at least min_gap_m apart; GRAZING where they are nearer, UNSEEN where there are none
-    (no detection)."""
-    gap = np.linalg.norm(points[:, 0] - points[:, 1], axis=1)
-    d = np.linalg.norm(p[:, None, :] - points, axis=2)
-    root = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
-    return np.where(~np.isfinite(gap), UNSEEN, np.where(gap < min_gap_m, GRAZING, root))
+    (no detection). ROOT_ROWS rows at a time: the temporaries, ~100 bytes a row, a chunk's
+    (each row's numbers its own; issue 15)."""
+    out = np.empty(p.shape[0], np.int64)
+    for a in range(0, p.shape[0], ROOT_ROWS):
+        pts = points[a:a + ROOT_ROWS]
+        gap = np.linalg.norm(pts[:, 0] - pts[:, 1], axis=1)
+        d = np.linalg.norm(p[a:a + ROOT_ROWS, None, :] - pts, axis=2)
+        root = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
+        out[a:a + ROOT_ROWS] = np.where(~np.isfinite(gap), UNSEEN,
+                                        np.where(gap < min_gap_m, GRAZING, root))
+    return out
 
 
 def branch_runs(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M,
@@ -170,16 +177,18 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
     code = roots_of(X[:, :3], points, min_gap_m)
     cands = candidates(X[:, :3], points, min_gap_m, root=code)
     windows = [(max(lo - margin, 0), min(hi + margin, n)) for lo, hi, _ in cands]
-    paths = []
-    for a, e in windows:  # the IMU's path over each window: the same whichever root
-        paths.append(window_path(steps, a + 1, e, X[a]))
 
     def test(i: int) -> float:
-        """The other root's misfit over stretch i's window against its own."""
+        """The other root's misfit over stretch i's window against its own. The IMU's path
+        over the window is the same whichever root (moves change positions, the path starts
+        from the IMU errors alone): made again where a stretch is tested again (rarely: 615
+        paths made in all on tiled-6x10, 0.3 s of CPU), not held for every stretch (32 bytes
+        a frame of every window, 3.5 MB and more at 60 minutes, issue 15)."""
         (lo, hi, r), (a, e) = cands[i], windows[i]
+        path = window_path(steps, a + 1, e, X[a])
         here = X[a:e, :3]
         there = moved(here, points[a:e], code[a:e], lo - a, hi - a, r)
-        return misfit(there, *paths[i]) / max(misfit(here, *paths[i]), 1e-300)
+        return misfit(there, *path) / max(misfit(here, *path), 1e-300)
 
     ratios = np.array([test(i) for i in range(len(cands))])
     count = 0

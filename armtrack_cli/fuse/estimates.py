@@ -46,7 +46,9 @@ class Inputs:
 @dataclass(frozen=True)
 class Estimates:
     mean: np.ndarray  # (n_frames, 6) wrist position and velocity
-    cov: np.ndarray | None  # (n_frames, 6, 6); None where the method keeps ``var`` alone
+    cov: np.ndarray | None  # (n_frames, 6, 6); None where the method keeps ``var`` alone;
+    #                         (n_frames, 21), the upper triangles, where only the means-only
+    #                         smoother reads them (methods.run_particles, packed)
     ess: np.ndarray | None  # (n_frames,) particle filters only
     codes: np.ndarray | None = None  # (n_frames,) what became of each detection (robust.USED…)
     q_WB: np.ndarray | None = None  # (n_frames, 4) orientation corrected by the method, if any

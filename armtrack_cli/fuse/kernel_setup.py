@@ -36,7 +36,8 @@ def load_kernels(method: str) -> None:
         pf_kernel.load_passes()  # before run: run then calls the passes' own code
         pf_kernel.run(np.zeros((10, 6)), np.zeros(2, np.uint64), z, q, d3, d3, d3,
                       d3, cam, dist, np.zeros(6), 1.0, 1.0, 0.3, method == "pf-constraint", 0,
-                      1.0, guard_args(FuseSettings(particles=10), d3, np.zeros(3)), d3, 0.0)
+                      1.0, guard_args(FuseSettings(particles=10), d3, np.zeros(3)), d3, 0.0,
+                      np.empty((2, 21)))
 
 
 def _load_smoother_passes() -> None:

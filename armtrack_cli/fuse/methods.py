@@ -110,7 +110,8 @@ def _predict_particles(x: np.ndarray, st: Steps, k: int, ace: np.ndarray,
 
 def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
                   s: FuseSettings, arm: Arm | None, *, constrained: bool,
-                  compiled: bool = True, v_ref: np.ndarray | None = None) -> Estimates:
+                  compiled: bool = True, v_ref: np.ndarray | None = None,
+                  packed: bool = False) -> Estimates:
     """Bootstrap PF (eqs. 12-14), or the layered-sampling PF of section III-E, steps 1-7, each
     detection gated and pf-constraint re-seeded on the ray-sphere points when its colour layer
     collapses or it re-acquires (fuse/robust.py).
@@ -119,7 +120,9 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     layer's weights are just its normalised likelihood. ``compiled``: the numba kernel
     (fuse/pf_kernel.py), which draws the same random numbers and equals this numpy code, the
     reference, to round-off (tests/test_pf_kernel.py, tests/test_gating.py); pf-constraint's
-    velocities move s.kalman_velocity of the way to ``v_ref`` (n, 3) after step 6."""
+    velocities move s.kalman_velocity of the way to ``v_ref`` (n, 3) after step 6.
+    ``packed``: the kernel's covariances kept as their upper triangles (n, 21), all the
+    means-only smoother needs (gaussian.rts_smooth): 168 bytes a frame, not 288 (issue 15)."""
     from armtrack_cli.filters import splitmix  # numba's: imported only when a particle filter runs
 
     rng = np.random.default_rng(s.seed)
@@ -129,10 +132,11 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
     n_frames = inp.z.shape[0]
     centres = arm.sphere_centres(inp.q_WB) if constrained else None  # once, for both uses
     v_gain = s.kalman_velocity if v_ref is not None else 0.0
+    if compiled:  # the kernel makes the ray-sphere points of the frames that re-seed; it
+        # reads v_ref only where v_gain > 0 (else a row, not an (n, 3) array of zeros)
+        vel = (_f64(np.zeros((1, 3)) if v_ref is None else v_ref), float(v_gain))
+        return _run_particles_compiled(inp, x, state, proj, s, arm, centres, vel, packed)
     v_ref = np.zeros((n_frames, 3)) if v_ref is None else v_ref
-    if compiled:  # the kernel makes the ray-sphere points of the frames that re-seed
-        return _run_particles_compiled(inp, x, state, proj, s, arm, centres,
-                                       (_f64(v_ref), float(v_gain)))
     points = (robust.ray_sphere_points(proj, arm, inp.z, inp.q_WB, centres) if constrained
               else np.full((n_frames, 2, 3), np.nan))
     rng = splitmix.Stream(state)
@@ -213,8 +217,10 @@ def _colour_layer(x: np.ndarray, px: np.ndarray, w: np.ndarray, z: np.ndarray,
 
 def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
                             proj: Projection, s: FuseSettings, arm: Arm | None,
-                            centres: np.ndarray | None, vel: tuple) -> Estimates:
-    """centres: arm.sphere_centres (pf-constraint), or None (the plain PF)."""
+                            centres: np.ndarray | None, vel: tuple, packed: bool = False
+                            ) -> Estimates:
+    """centres: arm.sphere_centres (pf-constraint), or None (the plain PF); ``packed``: the
+    covariances as their upper triangles (n, 21), else whole (n, 6, 6)."""
     from armtrack_cli.fuse import pf_kernel
 
     scheme(s.resampling)  # an unknown name is the same error as in the reference
@@ -228,8 +234,9 @@ def _run_particles_compiled(inp: Inputs, x: np.ndarray, state: np.ndarray,
         _f64(centres) if constrained else np.zeros((inp.z.shape[0], 3)), cam, dist, walk,
         0.5 / s.pixel_sigma**2, 0.5 / s.constraint_sigma_m**2,
         float(arm.L1) if constrained else 0.0, constrained, pf_kernel.RESAMPLING[s.resampling],
-        resample_below(s.pf_resample_ess), guard_args(s, rays, proj.eye), *vel)
-    return Estimates(mean, cov, n_eff, codes)
+        resample_below(s.pf_resample_ess), guard_args(s, rays, proj.eye), *vel,
+        np.empty((inp.z.shape[0], 21 if packed else 36)))
+    return Estimates(mean, cov if packed else cov.reshape(-1, 6, 6), n_eff, codes)
 
 
 def guard_args(s: FuseSettings, rays: np.ndarray, eye: np.ndarray) -> tuple:
@@ -261,7 +268,8 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
             raise ValueError(f"{method} needs the arm model")
         causal = method == "pf-constraint" and s.imu_error == "causal"
         est = (None if causal and s.kalman_linearise == "iterated"  # no first run to linearise
-               else run_particles(inp, x0, P0, proj, s, arm, constrained=True))
+               else run_particles(inp, x0, P0, proj, s, arm, constrained=True,
+                                  packed=method == "arm-smoother"))  # its means alone used
         if forward_done is not None and est is not None:  # else at the caller's end
             forward_done()
         if causal:

@@ -252,7 +252,7 @@ def _guarded_colour(xs, state, k, z, inv2s2, cam, dist, w, lw, px, codes, run_ga
 
 @njit(cache=True, error_model="numpy", nogil=True)  # threads beside it (issue 15)
 def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, L1,
-        constrained, scheme, resample_ess, guard, v_ref, v_gain):
+        constrained, scheme, resample_ess, guard, v_ref, v_gain, cov):
     """methods.run_particles: steps 1-7 of Tao & Hu III-E (constrained) or the bootstrap PF
     (eqs. 12-14). x (N, 6) the initial particles; state (2,) the splitmix stream (advanced);
     ``guard`` = (rays (n_frames, 3), eye (3,), r2, gate, reacquire, n_seed, reseed_ess,
@@ -260,11 +260,13 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
     detections' unit rays from the camera's centre eye (models.Projection.rays; read only
     where pf-constraint re-seeds, so the plain PF's may be (0, 3)); v_ref
     (n_frames, 3), v_gain: pf-constraint's cloud moved by v_gain (v_ref_k − its mean velocity)
-    after step 6 (methods.run_particles).
-    Returns mean (n_frames, 6), cov (n_frames, 6, 6), ess (n_frames,), codes (n_frames,)."""
+    after step 6 (methods.run_particles; v_ref is read only where v_gain > 0); cov
+    (n_frames, 36) or (n_frames, 21): where each frame's covariance is written, whole (row
+    by row) or its upper triangle (row by row: _store), the 21 numbers it has.
+    Returns mean (n_frames, 6), cov, ess (n_frames,), codes (n_frames,)."""
     n_frames, N = z.shape[0], x.shape[0]
     mean = np.empty((n_frames, 6))
-    cov = np.empty((n_frames, 6, 6))
+    c66 = np.empty((6, 6))  # a frame's covariance, then stored into cov[k]
     n_eff = np.empty(n_frames)
     xs, xr = np.ascontiguousarray(x.T), np.empty((6, N))
     w, lw = np.full(N, 1.0 / N), np.empty(N)
@@ -307,12 +309,14 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
                 _walk(xs, eps, walk)
             _constrain(xs, centres[k], L1, inv2c2, lw)  # step 5
             _normalise(lw, w)
-            _moments(xs, w, mean[k], cov[k], xr)
+            _moments(xs, w, mean[k], c66, xr)
+            _store(c66, cov[k])
             _resample(w, state, scheme, idx, work, start)  # step 6
             for j in range(3):  # the velocity the cloud is given (methods.run_particles)
                 shift[j] = v_gain * (v_ref[k, j] - mean[k, 3 + j]) if v_gain > 0.0 else 0.0
         else:
-            _moments(xs, w, mean[k], cov[k], xr)
+            _moments(xs, w, mean[k], c66, xr)
+            _store(c66, cov[k])
             if n_eff[k] >= resample_ess * N:
                 continue
             _resample(w, state, scheme, idx, work, start)
@@ -320,6 +324,17 @@ def run(x, state, z, dt, dp, dv, ace, centres, cam, dist, walk, inv2s2, inv2c2, 
         w[:] = 1.0 / N
         uniform = True
     return mean, cov, n_eff, codes
+
+
+@njit(cache=True, error_model="numpy")
+def _store(c, row):
+    """The covariance c (6, 6) into row: all 36 numbers (a (36,) row) or, a (21,) row, its
+    upper triangle row by row (np.triu_indices(6)'s order): copies, the same bits."""
+    t = 0
+    for a in range(6):
+        for b in range(a if row.size == 21 else 0, 6):
+            row[t] = c[a, b]
+            t += 1
 
 
 @njit(cache=True, error_model="numpy", fastmath=SUMS)
@@ -358,3 +373,4 @@ def load_passes() -> None:
     _walk(xs, eps, v6)
     _constrain(xs, v3, f, f, lw)
     _moments(xs, w, v6, np.zeros((6, 6)), xr)
+    _store(np.zeros((6, 6)), np.zeros(21))
