@@ -54,6 +54,29 @@ def test_the_peak_together_counts_this_process_and_the_child():
     assert apart.together_mb() >= 0.9 * held + child_peak
 
 
+def test_the_peak_together_counts_what_this_process_held_beside_the_child():
+    """What this process loads while the child runs (`armtrack run`: fuse's kernels beside
+    detect) is in together_mb: its highest RssAnon meanwhile, not its start's."""
+    import numpy as np
+
+    from armtrack_cli.pipeline import apart
+
+    child = apart.Apart("time", "sleep", (0.3,))
+    held = status_mb("RssAnon")
+    block = np.ones(40 * 2**20 // 8)  # 40 MB, touched, held until the child ends
+    assert child.result() is None
+    assert apart.together_mb() >= held + 0.9 * block.nbytes / 2**20
+
+
+def test_an_error_of_the_child_comes_back_after_work_beside_it():
+    from armtrack_cli.pipeline.apart import Apart
+
+    child = Apart("builtins", "int", ("x",))
+    sum(range(1000))
+    with pytest.raises(ValueError, match="invalid literal"):
+        child.result()
+
+
 def test_what_the_stage_prints_does_not_spoil_the_answer(capfd):
     assert call_apart("builtins", "print", "said by the stage") is None
     assert "said by the stage" in capfd.readouterr().err
