@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.compare.errors import error_rows, truth_at
-from armtrack_cli.compare.residual import winter_lowpass_columns
+from armtrack_cli.compare.residual import winter_lowpass_into
 from armtrack_cli.measures.signal import lowpass
 
 JOINTS = ("wrist", "elbow", "shoulder")
@@ -52,8 +52,7 @@ def _runs_lowpassed(x: np.ndarray, fs: float, fc: float, *, residual: bool = Fal
     edges = np.flatnonzero(np.diff(np.r_[0, np.isfinite(x).all(axis=1).astype(int), 0]))
     for a, b in zip(edges[::2], edges[1::2]):
         if residual:  # a run's coordinates side by side (each its own cut-off)
-            for j, (_, y) in enumerate(winter_lowpass_columns(x[a:b], fs, max_hz=fc)):
-                out[a:b, j] = y
+            winter_lowpass_into(x[a:b], fs, fc, out[a:b])
             continue
         for j in range(x.shape[1]):
             out[a:b, j] = lowpass(x[a:b, j:j + 1], fs, fc)[:, 0]

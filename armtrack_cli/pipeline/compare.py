@@ -17,6 +17,8 @@ from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import (
+    WRIST_ANGLES,
+    XYZ,
     columns,
     measure_comparison,
     trajectory_inputs,
@@ -98,6 +100,21 @@ def _camera_centre(work: Path):
         return None
 
 
+def _joints(traj: dict) -> dict:
+    """joint -> (n, 3) m of each joint the trajectory table has."""
+    return {j: columns(traj, [f"{j}_x", f"{j}_y", f"{j}_z"]) for j in JOINTS if f"{j}_x" in traj}
+
+
+def _used(session: Session, traj: dict) -> dict:
+    """The columns of a trajectory table that compare reads (its time, the joints' and named
+    points' positions, the wrist's SDs and angles): a 60-minute table's velocities and other
+    SDs are 8 MB it need not hold while it scores (issue 15)."""
+    points = (*JOINTS, *session.groundtruth.markers)
+    keep = {"t", *(f"{p}_{a}" for p in points for a in XYZ), *(f"wrist_{a}_sd" for a in XYZ),
+            *WRIST_ANGLES, *(f"{a}_sd" for a in WRIST_ANGLES)}
+    return {k: v for k, v in traj.items() if k in keep}
+
+
 def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
             ) -> tuple[list, list, dict]:
     """errors.csv's rows, measures.csv's rows and the frames without truth, of every method
@@ -111,9 +128,7 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
                             f"time (Qualisys {truth.t[0]:.2f}…{truth.t[-1]:.2f} s, trajectory "
                             f"{t[0]:.2f}…{t[-1]:.2f} s on the session clock)",
                             "check [sync] groundtruth_offset_s")
-        est = {j: columns(traj, [f"{j}_x", f"{j}_y", f"{j}_z"]) for j in JOINTS
-               if f"{j}_x" in traj}
-        s = score(m, t, est, truth)
+        s = score(m, t, _joints(traj), truth)  # the joints' (n, 3) copies freed with the call
         rows += s.rows
         excluded.update(s.excluded)
     # filtered at its own rate, as labs do, a joint at a time: each joint's raw markers are
@@ -126,10 +141,15 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
         one = Truth(t_truth, {joint: raw.pop(joint)}, rate)
         for_measures.xyz.update(denoised(one, DEFAULT.lowpass_hz).xyz)
         del one
+    last = list(trajs)[-1]
     for m, traj in trajs.items():
-        mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"),
-                                    truth_inputs(trajectory_inputs(traj, session), session,
-                                                 truth_markers(traj["t"], for_measures)))
+        markers = truth_markers(traj["t"], for_measures)  # at the trajectory's frames
+        if m == last:  # the filtered markers (26 MB at 60 minutes) freed before the measures
+            for_measures.xyz.clear()
+        truth = truth_inputs(trajectory_inputs(traj, session), session, markers)
+        del markers
+        mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"), truth)
+        del truth
     return rows, mrows, excluded
 
 
@@ -145,7 +165,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    trajs = {m: trajectory_columns(work / f"trajectory-{m}.csv") for m in methods}
+    trajs = {m: _used(session, trajectory_columns(work / f"trajectory-{m}.csv")) for m in methods}
     truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
                                         beside=True)  # a declared offset's check beside
     try:
