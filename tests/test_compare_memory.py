@@ -126,3 +126,66 @@ def test_winter_written_into_the_marker_itself_is_the_columns_copy():
     assert cut == [fc for fc, _ in ref]
     for j, (_, y) in enumerate(ref):
         assert np.array_equal(own[:, j], y)
+
+
+def _marker_truth(seed: int):
+    from armtrack_cli.compare.score import Truth
+
+    rng = np.random.default_rng(seed)
+    t = np.arange(3000) / 100.0
+    xyz = {j: np.cumsum(rng.normal(0, 1e-3, (t.size, 3)), axis=0) for j in ("elbow", "wrist")}
+    xyz["wrist"][1200:1260] = np.nan  # a gap: two runs, each its own cut-offs
+    xyz["elbow"][2800:2850] = np.nan  # its last run (1.5 s) too short for the analysis
+    return Truth(t, xyz, 100.0)
+
+
+def test_truth_filtered_in_place_is_the_copys_bit_for_bit():
+    from armtrack_cli.compare.score import denoised
+
+    ref = denoised(_marker_truth(4), 6.0)
+    own = _marker_truth(4)
+    got = denoised(own, 6.0, own=True)
+    for j, x in ref.xyz.items():
+        assert got.xyz[j] is own.xyz[j]  # no copy
+        assert np.array_equal(got.xyz[j], x, equal_nan=True)
+
+
+def test_truth_markers_taken_are_the_same():
+    from armtrack_cli.compare.score import truth_markers
+
+    truth = _marker_truth(5)
+    t = np.arange(0.013, 29.0, 1 / 30)
+    ref = truth_markers(t, truth)
+    got = truth_markers(t, truth, take=True)
+    assert not truth.xyz and list(got) == list(ref)
+    assert all(np.array_equal(got[k], ref[k], equal_nan=True) for k in ref)
+
+
+def test_the_offset_check_first_on_a_long_truth_gives_the_same_files(tmp_path, monkeypatch):
+    """A truth longer than BESIDE_MAX_SAMPLES is checked before the scoring instead of beside
+    it (and every joint then filtered in place): the same bytes, the same warning."""
+    import importlib
+    import shutil
+    import warnings
+
+    from armtrack_cli import pipeline
+
+    from .conftest import REPO
+
+    pc = importlib.import_module("armtrack_cli.pipeline.compare")
+    s = tmp_path / "s"
+    shutil.copytree(REPO / "sample_sessions" / "circle-01", s)
+    toml = s / "session.toml"
+    toml.write_text(toml.read_text().replace("groundtruth_offset_s = -1.5",
+                                             "groundtruth_offset_s = -1.2"))
+    pipeline.run(s, through="fuse")
+    files = ("errors.csv", "measures.csv", "errors.meta.json", "measures.meta.json")
+    got = {}
+    for most in (pc.BESIDE_MAX_SAMPLES, 0):
+        monkeypatch.setattr(pc, "BESIDE_MAX_SAMPLES", most)
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            pipeline.compare(s)
+        assert [w for w in seen if "not the declared -1.200 s" in str(w.message)]
+        got[most] = [(s / "armtrack" / f).read_bytes() for f in files]
+    assert got[0] == got[pc.BESIDE_MAX_SAMPLES]
