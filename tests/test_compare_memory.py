@@ -189,3 +189,24 @@ def test_the_offset_check_first_on_a_long_truth_gives_the_same_files(tmp_path, m
         assert [w for w in seen if "not the declared -1.200 s" in str(w.message)]
         got[most] = [(s / "armtrack" / f).read_bytes() for f in files]
     assert got[0] == got[pc.BESIDE_MAX_SAMPLES]
+
+
+def test_truth_read_without_copies_is_the_old_forms_bit_for_bit():
+    """pipeline/groundtruth.read_truth: a one-marker joint no longer copied through a mean, and
+    carried into W with the offset added in place: the numbers of the old expressions."""
+    from armtrack_cli.pipeline.groundtruth import read_truth
+    from armtrack_cli.session.config import load_session
+    from armtrack_cli.session.groundtruth import read_markers
+
+    from .conftest import REPO
+
+    session = load_session(REPO / "sample_sessions" / "circle-01")
+    gt = session.groundtruth
+    traj = read_markers(gt.file)
+    got = read_truth(session, offset_s=0.25)
+    assert np.array_equal(got.t, traj.t + 0.25)
+    for role, name in gt.markers.items():
+        mean = np.mean([traj.marker(name)], axis=0)
+        ref = mean @ gt.to_world[:3, :3].T + gt.to_world[:3, 3]
+        assert got.xyz[role].flags.c_contiguous
+        assert np.array_equal(got.xyz[role], ref, equal_nan=True), role
