@@ -78,11 +78,11 @@ def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool 
         info = {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4), "from": "auto",
                 "estimated_with": ref}
         return Truth(raw.t + off.estimate_s, raw.xyz, raw.rate_hz), Done(info)
-    truth = Truth(raw.t + centre, raw.xyz, raw.rate_hz)
     if beside and raw.t.size <= BESIDE_MAX_SAMPLES:
-        return truth, Then(Deferred(check), partial(_judged, gt.file, centre, ref,
-                                                   0.5 / raw.rate_hz))
-    return truth, Done(_judged(gt.file, centre, ref, 0.5 / raw.rate_hz, check()))
+        return Truth(raw.t + centre, raw.xyz, raw.rate_hz), Then(Deferred(check), partial(
+            _judged, gt.file, centre, ref, 0.5 / raw.rate_hz))
+    judged = _judged(gt.file, centre, ref, 0.5 / raw.rate_hz, check())  # the clock shifted
+    return Truth(raw.t + centre, raw.xyz, raw.rate_hz), Done(judged)  # after: one t at once
 
 
 def _judged(file, centre: float, ref: str, slack: float, off) -> dict:
