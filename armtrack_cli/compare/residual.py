@@ -26,7 +26,9 @@ def residuals(x: np.ndarray, fs: float, cutoffs: np.ndarray) -> np.ndarray:
 
 
 def _rms(x: np.ndarray, y: np.ndarray) -> float:
-    return float(np.sqrt(np.mean((x - y) ** 2)))
+    d = x - y
+    np.square(d, out=d)  # in place: (x − y)² without a second temporary of x's length
+    return float(np.sqrt(np.mean(d)))
 
 
 def winter_cutoff(x: np.ndarray, fs: float, *, max_hz: float) -> float:
@@ -48,33 +50,49 @@ def winter_lowpass_columns(x: np.ndarray, fs: float, *, max_hz: float
     """winter_lowpass of each column of x (N, d), [(cut-off, filtered column (N,))]: the
     columns side by side through the cut-offs, each filter's spectrum taken once for them
     all (a column's arithmetic is its own, so its numbers are those it has alone)."""
+    out = np.empty(x.shape)
+    return [(fc, out[:, j]) for j, fc in enumerate(winter_lowpass_into(x, fs, max_hz, out))]
+
+
+def winter_lowpass_into(x: np.ndarray, fs: float, max_hz: float, out: np.ndarray
+                        ) -> list[float]:
+    """winter_lowpass_columns's cut-offs, each column's filtered copy written into ``out``
+    (N, d) as soon as it is found (``out`` may be x itself: a column is written once it is
+    no longer read), and its transforms let go of then (issue 15: a 60-minute marker's three
+    coordinates held their transforms and results to the end, 26 MB)."""
     nyq = fs / 2.0
     d = x.shape[1]
+    cut = [max_hz] * d
     if len(x) < 2 * fs or max_hz <= MIN_HZ or 0.3 * nyq <= max_hz:
-        return [(max_hz, lowpass(x[:, j:j + 1], fs, max_hz)[:, 0]) for j in range(d)]
+        for j in range(d):
+            out[:, j] = lowpass(x[:, j:j + 1], fs, max_hz)[:, 0]
+        return cut
     noise_band = np.linspace(0.3 * nyq, 0.45 * nyq, 8)
     grid = np.arange(MIN_HZ, max_hz + 1e-9, 0.25)
     cutoffs = [float(f) for f in (*noise_band, *grid, max_hz)]
-    ready = [ZeroPhase(x[None, :, j], fs, cutoffs) for j in range(d)]
+    ready = {j: ZeroPhase(x[None, :, j], fs, cutoffs) for j in range(d)}
     r_noise = [[] for _ in range(d)]
     for fc in cutoffs[:len(noise_band)]:
         power = ready[0].power_at(fc)
         for j in range(d):
             r_noise[j].append(_rms(x[:, j], ready[j].at(fc, power)[0]))
-    out: list[tuple[float, np.ndarray] | None] = [None] * d
     level = {}  # column -> its noise level a, while its search goes on
     for j in range(d):
         slope, a = np.polyfit(noise_band, r_noise[j], 1)
         if np.isfinite(a) and a > 0:
             level[j] = a
+    found = set()
     for fc in cutoffs[len(noise_band):-1]:  # the grid
         if not level:
             break
-        power = ready[0].power_at(fc)
+        power = ready[next(iter(level))].power_at(fc)  # the same for every column
         for j in list(level):
             y = ready[j].at(fc, power)[0]
             if _rms(x[:, j], y) <= level[j]:
-                out[j] = (float(fc), y)
-                del level[j]
-    return [o if o is not None else (max_hz, lowpass(x[:, j:j + 1], fs, max_hz)[:, 0])
-            for j, o in enumerate(out)]
+                out[:, j], cut[j] = y, float(fc)
+                found.add(j)
+                del level[j], ready[j], y
+    del ready
+    for j in sorted(set(range(d)) - found):  # never at the noise level (or none to meet): max_hz
+        out[:, j] = lowpass(x[:, j:j + 1], fs, max_hz)[:, 0]
+    return cut

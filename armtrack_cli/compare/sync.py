@@ -37,22 +37,32 @@ class Offset:
 
 
 def _across(x: np.ndarray, rays: np.ndarray | None) -> np.ndarray:
-    """x (n, 3) without its components along the unit rays (n, 3) (unchanged without rays)."""
-    return x if rays is None else x - np.sum(x * rays, axis=1, keepdims=True) * rays
+    """x (n, 3) without its components along the unit rays (n, 3) (unchanged without rays),
+    in place: x and rays are the caller's own (this runs hundreds of times beside the
+    scoring, issue 15)."""
+    if rays is None:
+        return x
+    along = np.sum(x * rays, axis=1, keepdims=True)
+    x -= np.multiply(along, rays, out=rays)
+    return x
 
 
 def _residual(delta, t, est, truth_t, truth_xyz, rate_hz):
     tr = truth_at(t, truth_t + delta, truth_xyz, rate_hz)
     ok = np.isfinite(est).all(axis=1) & np.isfinite(tr).all(axis=1)
-    return est[ok] - tr[ok], ok
+    r = est[ok]
+    r -= tr[ok]
+    return r, ok
 
 
 def _cost(delta, t, est, truth_t, truth_xyz, rate_hz, n_est, rays=None):
     r, ok = _residual(delta, t, est, truth_t, truth_xyz, rate_hz)
     if ok.sum() < MIN_OVERLAP * n_est:
         return np.inf
-    r = _across(r - r.mean(axis=0), None if rays is None else rays[ok])
-    return float(np.mean(np.sum(r**2, axis=1)))
+    r -= r.mean(axis=0)  # in place, as in _across: this runs beside the scoring (issue 15)
+    r = _across(r, None if rays is None else rays[ok])
+    np.square(r, out=r)
+    return float(np.mean(np.sum(r, axis=1)))
 
 
 def _grid_costs(grid, t, est, truth_t, truth_xyz, rate_hz, rays) -> np.ndarray:
@@ -95,11 +105,13 @@ def estimate_offset(t: np.ndarray, est: np.ndarray, truth_t: np.ndarray, truth_x
                          d0 - step, d0 + step, xatol=1e-5)  # scipy's bounded minimize_scalar
     delta = float(x) if fun <= costs.min() else float(d0)
     r, ok = _residual(delta, t, est, truth_t, truth_xyz, rate_hz)
-    r = r - r.mean(axis=0)  # the SD from the whole residual: across the rays alone it is
-    #                         pixel-small and the SD too sure (0.1 ms against 0.6 ms off)
-    h = 0.5 * step  # the truth's velocity at the frames, by central differences
-    v = (truth_at(t, truth_t + delta + h, truth_xyz, rate_hz)
-         - truth_at(t, truth_t + delta - h, truth_xyz, rate_hz))[ok] / (2 * h)
+    r -= r.mean(axis=0)  # the SD from the whole residual: across the rays alone it is
+    #                      pixel-small and the SD too sure (0.1 ms against 0.6 ms off)
+    h = 0.5 * step  # the truth's velocity at the frames, by central differences (in place)
+    v = truth_at(t, truth_t + delta + h, truth_xyz, rate_hz)
+    v -= truth_at(t, truth_t + delta - h, truth_xyz, rate_hz)
+    v = v[ok]
+    v /= 2 * h
     good = np.isfinite(v).all(axis=1)
     r, v = r[good], v[good]
     n = len(r)

@@ -119,13 +119,16 @@ class ZeroPhase:
 
     def __init__(self, x: np.ndarray, fs: float, cutoffs: Iterable[float]):
         x = np.atleast_2d(np.asarray(x, float))
-        self.x, self.fs = x, fs
-        self.ext = np.concatenate([2 * x[:, :1] - x[:, PAD:0:-1], x,
-                                   2 * x[:, -1:] - x[:, -2:-(PAD + 2):-1]], axis=1)  # odd
-        self.ne = ne = self.ext.shape[1]
+        self.fs, self.n_signals = fs, len(x)
+        ext = np.concatenate([2 * x[:, :1] - x[:, PAD:0:-1], x,
+                              2 * x[:, -1:] - x[:, -2:-(PAD + 2):-1]], axis=1)  # odd
+        self.ne = ne = ext.shape[1]
         longest = max(len(_response(float(f), fs, ne)[0]) for f in cutoffs)
         self.nfft = fast_len(ne + longest)
-        self.E = np.fft.rfft(self.ext, self.nfft)
+        self.E = np.fft.rfft(ext, self.nfft)
+        # at() reads only the extension's first sample and its last `longest`: the rest of it
+        # (a copy of x) is not kept (three coordinates of a 60-minute marker: 9 MB; issue 15)
+        self.first, self.tail = ext[:, :1].copy(), ext[:, ne - longest:].copy()
 
     def power_at(self, fc: float) -> np.ndarray:
         """|H(fc)|² on the transform's bins."""
@@ -134,18 +137,20 @@ class ZeroPhase:
 
     def at(self, fc: float, power: np.ndarray | None = None) -> np.ndarray:
         """(S, N) the signals low-passed forward and backward at fc: scipy's sosfiltfilt."""
-        ext, ne, nfft = self.ext, self.ne, self.nfft
+        ne, nfft, end = self.ne, self.nfft, self.tail.shape[1]  # ext[:, ne - end:] is tail
         h, R, zi = _response(fc, self.fs, ne)
         L = len(h)
+        if L > end:
+            raise ValueError(f"{fc} Hz is not one of the cut-offs made ready")
         y = np.fft.irfft(self.E * (self.power_at(fc) if power is None else power), nfft)[:, :ne]
         g = h[::-1]
-        z1 = (ext[:, :1] * zi) @ R.T  # (S, L): the forward pass's initial-state response
-        for i in range(len(self.x)):
+        z1 = (self.first * zi) @ R.T  # (S, L): the forward pass's initial-state response
+        for i in range(self.n_signals):
             if L > 1:  # c beyond ne (it is cut from y1), from ext's last L − 1 samples
-                tail = np.convolve(h, ext[i, ne - L + 1:])[L - 1:2 * L - 2]
+                tail = np.convolve(h, self.tail[i, end - L + 1:])[L - 1:2 * L - 2]
                 y[i, ne - L + 1:] -= np.convolve(g, tail)[:L - 1]
             y[i, :L] += np.convolve(g, z1[i])[L - 1:2 * L - 1]
-        last = ext[:, ne - L:][:, ::-1] @ h + z1[:, -1] * (L == ne)  # y1[ne − 1]
+        last = self.tail[:, end - L:][:, ::-1] @ h + z1[:, -1] * (L == ne)  # y1[ne − 1]
         y[:, ne - L:] += ((last[:, None] * zi) @ R.T)[:, ::-1]  # backward initial state
         return y[:, PAD:ne - PAD]
 

@@ -17,6 +17,8 @@ from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import (
+    WRIST_ANGLES,
+    XYZ,
     columns,
     measure_comparison,
     trajectory_inputs,
@@ -28,11 +30,17 @@ from armtrack_cli.session.outputs import output_set, write_rows
 from armtrack_cli.session.plain_tables import kinematics_rows, trajectory_columns
 from armtrack_cli.session.workfolder import WorkFolder
 
+BESIDE_MAX_SAMPLES = 120_000  # 20 minutes at 100 Hz (below)
 AUTO_SEARCH_S = 3.0  # "auto": offsets from −3 to +3 s are searched
 CHECK_SEARCH_S = 1.0  # a declared offset is checked within ±1 s of itself
 
 
 SYNC_PREFERENCE = ("arm-smoother", "pf-constraint", "ukf", "pf", "ekf", "inertial")  # best-tracking first
+
+
+def sync_joint(xyz: dict) -> str:
+    """The joint whose raw markers the offset's check reads (held by it while it runs)."""
+    return "wrist" if "wrist" in xyz else next(iter(xyz))
 
 
 def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool = False
@@ -43,13 +51,15 @@ def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool 
     trajectory table; with the camera's centre ``eye`` (3,) m in W, from the residual across
     the camera's rays). With ``beside``, a declared offset's check (which cannot move the
     truth, only warn) runs on a second thread while the caller scores (core/threads.py); its
-    warning comes with ``result()``, on the caller's thread."""
+    warning comes with ``result()``, on the caller's thread. Not on a truth longer than
+    BESIDE_MAX_SAMPLES: there the check's copies and temporaries on top of the scoring's
+    were compare's peak (25 MB at 60 minutes; issue 15), and it runs first."""
     gt = session.groundtruth
     declared = session.sync.groundtruth_offset_s != "auto"
     raw = read_truth(session, offset_s=0.0)
     ref = next((m for m in SYNC_PREFERENCE if m in trajs), next(iter(trajs)))
     traj = trajs[ref]
-    joint = "wrist" if "wrist" in raw.xyz else next(iter(raw.xyz))
+    joint = sync_joint(raw.xyz)
     est = columns(traj, [f"{joint}_x", f"{joint}_y", f"{joint}_z"])
     centre = session.offset_s("groundtruth_offset_s") if declared else 0.0
     t_raw, x_raw, t_est = raw.t, raw.xyz[joint], traj["t"]  # bound now: the caller pops them
@@ -68,11 +78,11 @@ def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool 
         info = {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4), "from": "auto",
                 "estimated_with": ref}
         return Truth(raw.t + off.estimate_s, raw.xyz, raw.rate_hz), Done(info)
-    truth = Truth(raw.t + centre, raw.xyz, raw.rate_hz)
-    if beside:
-        return truth, Then(Deferred(check), partial(_judged, gt.file, centre, ref,
-                                                   0.5 / raw.rate_hz))
-    return truth, Done(_judged(gt.file, centre, ref, 0.5 / raw.rate_hz, check()))
+    if beside and raw.t.size <= BESIDE_MAX_SAMPLES:
+        return Truth(raw.t + centre, raw.xyz, raw.rate_hz), Then(Deferred(check), partial(
+            _judged, gt.file, centre, ref, 0.5 / raw.rate_hz))
+    judged = _judged(gt.file, centre, ref, 0.5 / raw.rate_hz, check())  # the clock shifted
+    return Truth(raw.t + centre, raw.xyz, raw.rate_hz), Done(judged)  # after: one t at once
 
 
 def _judged(file, centre: float, ref: str, slack: float, off) -> dict:
@@ -98,11 +108,27 @@ def _camera_centre(work: Path):
         return None
 
 
-def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
-            ) -> tuple[list, list, dict]:
+def _joints(traj: dict) -> dict:
+    """joint -> (n, 3) m of each joint the trajectory table has."""
+    return {j: columns(traj, [f"{j}_x", f"{j}_y", f"{j}_z"]) for j in JOINTS if f"{j}_x" in traj}
+
+
+def _used(session: Session, traj: dict) -> dict:
+    """The columns of a trajectory table that compare reads (its time, the joints' and named
+    points' positions, the wrist's SDs and angles): a 60-minute table's velocities and other
+    SDs are 8 MB it need not hold while it scores (issue 15)."""
+    points = (*JOINTS, *session.groundtruth.markers)
+    keep = {"t", *(f"{p}_{a}" for p in points for a in XYZ), *(f"wrist_{a}_sd" for a in XYZ),
+            *WRIST_ANGLES, *(f"{a}_sd" for a in WRIST_ANGLES)}
+    return {k: v for k, v in traj.items() if k in keep}
+
+
+def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth,
+            pinned: str | None = None) -> tuple[list, list, dict]:
     """errors.csv's rows, measures.csv's rows and the frames without truth, of every method
     in ``trajs`` against ``truth`` (on the session clock), whose markers are taken out of it
-    as they are used (truth.xyz is left empty)."""
+    as they are used (truth.xyz is left empty) and filtered in place, but for ``pinned``'s,
+    which the offset's check may still be reading beside."""
     rows, mrows, excluded = [], [], {}
     for m, traj in trajs.items():
         t = traj["t"]
@@ -111,9 +137,7 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
                             f"time (Qualisys {truth.t[0]:.2f}…{truth.t[-1]:.2f} s, trajectory "
                             f"{t[0]:.2f}…{t[-1]:.2f} s on the session clock)",
                             "check [sync] groundtruth_offset_s")
-        est = {j: columns(traj, [f"{j}_x", f"{j}_y", f"{j}_z"]) for j in JOINTS
-               if f"{j}_x" in traj}
-        s = score(m, t, est, truth)
+        s = score(m, t, _joints(traj), truth)  # the joints' (n, 3) copies freed with the call
         rows += s.rows
         excluded.update(s.excluded)
     # filtered at its own rate, as labs do, a joint at a time: each joint's raw markers are
@@ -122,14 +146,17 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth
     t_truth, rate, raw = truth.t, truth.rate_hz, truth.xyz
     del truth
     for_measures = Truth(t_truth, {}, rate)
-    for joint in list(raw):
+    for joint in sorted(raw, key=lambda j: j == pinned):  # the pinned one last
         one = Truth(t_truth, {joint: raw.pop(joint)}, rate)
-        for_measures.xyz.update(denoised(one, DEFAULT.lowpass_hz).xyz)
+        for_measures.xyz.update(denoised(one, DEFAULT.lowpass_hz, own=joint != pinned).xyz)
         del one
-    for m, traj in trajs.items():
-        mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"),
-                                    truth_inputs(trajectory_inputs(traj, session), session,
-                                                 truth_markers(traj["t"], for_measures)))
+    last = list(trajs)[-1]
+    for m, traj in trajs.items():  # the last takes the filtered markers (26 MB at 60 minutes)
+        markers = truth_markers(traj["t"], for_measures, take=m == last)  # at its frames
+        truth = truth_inputs(trajectory_inputs(traj, session), session, markers)
+        del markers
+        mrows += measure_comparison(m, kinematics_rows(work / f"kinematics-{m}.csv"), truth)
+        del truth
     return rows, mrows, excluded
 
 
@@ -145,11 +172,12 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    trajs = {m: trajectory_columns(work / f"trajectory-{m}.csv") for m in methods}
+    trajs = {m: _used(session, trajectory_columns(work / f"trajectory-{m}.csv")) for m in methods}
     truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
                                         beside=True)  # a declared offset's check beside
     try:
-        rows, mrows, excluded = _scored(session, work, trajs, truth)
+        rows, mrows, excluded = _scored(session, work, trajs, truth, None if isinstance(
+            pending, Done) else sync_joint(truth.xyz))  # the check beside reads that joint
     finally:  # the check's estimate (and its warning) before any error of the scoring's
         offset = pending.result()
     with output_set():

@@ -118,7 +118,9 @@ def joint_points(session: Session, traj: MarkerTrajectories) -> dict[str, np.nda
     out = {}
     for role, expr in gt.markers.items():
         tracks = [marker_track(session, traj, n, static) for n in point_markers(expr)]
-        out[role] = np.mean(tracks, axis=0)  # mid(...): a gap in any marker is a gap
+        # mid(...): a gap in any marker is a gap; one marker is itself (its mean: the same
+        # numbers), a view of the table (read_truth carries it into W: no copy of it here)
+        out[role] = tracks[0] if len(tracks) == 1 else np.mean(tracks, axis=0)
         if not np.isfinite(out[role]).all(axis=1).any():
             raise GroundTruthError(traj.path, f"marker {expr!r} ({role}) is never seen: every "
                                    "frame is a gap", "check the marker labels in the capture "
@@ -136,7 +138,7 @@ def read_truth(session: Session, *, offset_s: float | None = None) -> Truth:
     pts = joint_points(session, traj)
     t = traj.t + (session.offset_s("groundtruth_offset_s") if offset_s is None else offset_s)
     rate = traj.rate_hz
-    del traj  # the file's table freed before the points are carried into W (issue 15)
+    del traj  # the file's table freed once the last point taken from it is in W (issue 15)
     return Truth(t, {j: to_world(pts.pop(j), gt.to_world) for j in list(pts)},
                  rate)  # every named point: joints, or a palm session's markers
 

@@ -168,4 +168,6 @@ def missing_marker(traj: MarkerTrajectories, name: str, where: str) -> GroundTru
 
 def to_world(xyz: np.ndarray, T: np.ndarray) -> np.ndarray:
     """Apply the 4x4 Qualisys -> W transform to (..., 3) points in metres; NaN stays NaN."""
-    return xyz @ T[:3, :3].T + T[:3, 3]
+    out = xyz @ T[:3, :3].T
+    out += T[:3, 3]  # in place: one new array of the points' size, not two
+    return out
