@@ -137,6 +137,18 @@ def run_particles(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
         vel = (_f64(np.zeros((1, 3)) if v_ref is None else v_ref), float(v_gain))
         return _run_particles_compiled(inp, x, state, proj, s, arm, centres, vel, packed)
     v_ref = np.zeros((n_frames, 3)) if v_ref is None else v_ref
+    return _run_particles_reference(inp, x, state, proj, s, arm, centres, v_ref, v_gain,
+                                    constrained)
+
+
+def _run_particles_reference(inp: Inputs, x: np.ndarray, state, proj: Projection,
+                             s: FuseSettings, arm: Arm | None, centres, v_ref: np.ndarray,
+                             v_gain: float, constrained: bool) -> Estimates:
+    """run_particles' numpy form from the initial cloud x and the SplitMix64 ``state``: the
+    reference the compiled kernel equals."""
+    from armtrack_cli.filters import splitmix
+
+    n_frames, N = inp.z.shape[0], s.particles
     points = (robust.ray_sphere_points(proj, arm, inp.z, inp.q_WB, centres) if constrained
               else np.full((n_frames, 2, 3), np.nan))
     rng = splitmix.Stream(state)
