@@ -33,6 +33,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from armtrack_cli.core.quaternion import row_spans
 from armtrack_cli.fuse.path_kernel import affine_path
 
 MIN_GAP_M = 0.02  # the roots this far apart at least on every frame of a run: nearer, the ray
@@ -54,12 +55,12 @@ def roots_of(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M) ->
     (no detection). ROOT_ROWS rows at a time: the temporaries, ~100 bytes a row, a chunk's
     (each row's numbers its own; issue 15)."""
     out = np.empty(p.shape[0], np.int64)
-    for a in range(0, p.shape[0], ROOT_ROWS):
-        pts = points[a:a + ROOT_ROWS]
+    for a, b in row_spans(p.shape[0], ROOT_ROWS):
+        pts = points[a:b]
         gap = np.linalg.norm(pts[:, 0] - pts[:, 1], axis=1)
-        d = np.linalg.norm(p[a:a + ROOT_ROWS, None, :] - pts, axis=2)
+        d = np.linalg.norm(p[a:b, None, :] - pts, axis=2)
         root = np.argmin(np.where(np.isfinite(d), d, np.inf), axis=1)
-        out[a:a + ROOT_ROWS] = np.where(~np.isfinite(gap), UNSEEN,
+        out[a:b] = np.where(~np.isfinite(gap), UNSEEN,
                                         np.where(gap < min_gap_m, GRAZING, root))
     return out
 

@@ -48,6 +48,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.bounded_min import bounded_min
 from armtrack_cli.core.curves import bspline_rows, hermite
 from armtrack_cli.core.grid_search import coarse_to_fine
@@ -194,7 +195,7 @@ def _chunks(p: SyncProblem, pre: _Prepared, delta: float, spans=None):
     are the whole session's (its stretch's: SyncProblem.frame_cuts): memory bounded however
     long the session (issue 15)."""
     n, h = p.t_frames.size, pre.window // 2
-    for a, b in spans or ((a, min(a + CHUNK, n)) for a in range(0, n, CHUNK)):
+    for a, b in spans or quat.row_spans(n, CHUNK):
         sl = slice(max(a - h, 0), min(b + h, n))
         W = columns(p, pre, delta, sl)[a - sl.start:b - sl.start]
         yield a, b, W, np.isfinite(W).all(axis=(1, 2)) & np.isfinite(pre.vel_img[a:b]).all(axis=1)

@@ -91,8 +91,7 @@ def ray_jacobians(p: SyncProblem, delta: float) -> np.ndarray:
     x = wrist_on_rays(p, delta)
     idx = np.flatnonzero(np.isfinite(x).all(axis=1))
     J = np.empty((x.shape[0], 2, 3))
-    for a in range(0, x.shape[0], CHUNK):
-        near = idx[np.clip(np.searchsorted(idx, np.arange(a, min(a + CHUNK, x.shape[0]))), 0,
-                           idx.size - 1)]
-        J[a:a + CHUNK] = _jacobians(p.proj, x[near])
+    for a, b in quat.row_spans(x.shape[0], CHUNK):
+        near = idx[np.clip(np.searchsorted(idx, np.arange(a, b)), 0, idx.size - 1)]
+        J[a:b] = _jacobians(p.proj, x[near])
     return J

@@ -16,20 +16,18 @@ import os
 import pickle
 import subprocess
 import sys
-import threading
 from typing import Any
 
 from armtrack_cli.session.proc_status import status_mb
 
 _CHILD = "from armtrack_cli.pipeline.apart import child; child()"
 _TOGETHER = [0.0]  # MB, the highest of together_mb's sums so far in this process
-SAMPLE_S = 0.05  # how often Apart samples this process's memory while it works beside a child
 
 
 def together_mb() -> float:
     """The highest resident memory (MB) of this process and a child of call_apart's at once
-    so far: this process's highest RssAnon while the child ran (what it held when it started
-    it, and what it loaded beside it; its file-backed pages are the same libraries' the
+    so far: this process's RssAnon while the child ran (the larger of what it held when it
+    started it and when it waited for it; its file-backed pages are the same libraries' the
     child maps, counted there) plus the child's VmHWM; 0 before any call (or without /proc)."""
     return _TOGETHER[0]
 
@@ -42,15 +40,14 @@ def call_apart(module: str, name: str, *args, **kwargs) -> Any:
 
 class Apart:
     """``module.name(*args, **kwargs)`` started in a child process; ``result()`` waits for it.
-    Between the two this process may work beside the child (`armtrack run` loads fuse's
-    kernels while detect runs): what it holds meanwhile is sampled (RssAnon, every
-    SAMPLE_S, and when result() is called), so that together_mb counts this process's
-    highest, not its start's. Only then: once it waits, what it holds stays as it is (and
-    a sample costs about 0.1 ms of CPU: 50 a second through detect took 0.24 s of it)."""
+    Between the two this process may work beside the child: together_mb counts its RssAnon at
+    the start and at result(), the larger (what it loaded and still holds; a caller that
+    loads and frees beside the child would need sampling, which none does: run calls
+    result() at once)."""
 
     def __init__(self, module: str, name: str, args: tuple = (), kwargs: dict | None = None):
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
-        self._held, self._done = status_mb("RssAnon"), threading.Event()
+        self._held = status_mb("RssAnon")
         self._what = f"{module}.{name}"
         self._proc = subprocess.Popen([sys.executable, "-c", _CHILD], env=env,
                                       stdin=subprocess.PIPE, stdout=subprocess.PIPE)
@@ -59,16 +56,8 @@ class Apart:
             self._proc.stdin.close()  # the child reads its call whole before it starts
         except BrokenPipeError:  # it died at once: result() says so
             pass
-        self._sampler = threading.Thread(target=self._sample, daemon=True)
-        self._sampler.start()
-
-    def _sample(self) -> None:
-        while not self._done.wait(SAMPLE_S):
-            self._held = max(self._held, status_mb("RssAnon"))
 
     def result(self) -> Any:
-        self._done.set()
-        self._sampler.join()
         held = max(self._held, status_mb("RssAnon"))
         try:
             answer = self._proc.stdout.read()
