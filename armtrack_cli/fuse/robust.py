@@ -86,19 +86,19 @@ def detection_rays(proj, z: np.ndarray) -> np.ndarray:
     return out
 
 
-def ray_sphere_points(proj, arm, z: np.ndarray, q_WB, centres: np.ndarray | None = None,
-                      rays: np.ndarray | None = None) -> np.ndarray:
+def ray_sphere_points(proj, arm, z: np.ndarray, q_WB, centres: np.ndarray | None = None
+                      ) -> np.ndarray:
     """(n, 2, 3): per frame the two points where the camera ray of detection z (n, 2) px meets
     the wrist sphere |p − (S + L2 R_WB u)| = L1 (eq. 15), nearer the camera first; where the ray
     misses it, its point nearest to the sphere, twice; NaN where there is no detection.
-    ``centres``: arm.sphere_centres(q_WB), where the caller has them already; ``rays``:
-    detection_rays(proj, z), likewise; q_WB (n, 4), or a function that makes it, called once
-    the rays are made (their temporaries and it not held at once: issue 15)."""
+    ``centres``: arm.sphere_centres(q_WB), where the caller has them already; q_WB (n, 4), or
+    a function that makes it, called once the rays are made (their temporaries and it not
+    held at once: issue 15)."""
     n = z.shape[0]
     seen = np.isfinite(z).all(axis=1)
     if not seen.any():
         return np.full((n, 2, 3), np.nan)
-    rays = detection_rays(proj, z) if rays is None else rays  # (n, 3)
+    rays = detection_rays(proj, z)  # (n, 3)
     q_WB = q_WB() if callable(q_WB) else q_WB
     out = np.full((n, 2, 3), np.nan)
     rows = np.flatnonzero(seen)
