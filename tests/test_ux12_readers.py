@@ -85,3 +85,46 @@ def test_generic_csv_by_column_name(tmp_path, variant):
     for field in ("t", "acc", "gyr", "quat"):
         np.testing.assert_array_equal(getattr(got, field), getattr(ref, field))
     assert got.rate_hz == ref.rate_hz
+
+
+VIDEO = REPO / "sample_sessions" / "circle-01" / "video.mp4"
+
+
+def _video_with_times(tmp_path, text: str):
+    import shutil
+
+    from armtrack_cli.session.video import probe_video
+
+    shutil.copy(VIDEO, tmp_path / "video.mp4")
+    (tmp_path / "video_timestamps.csv").write_text(text)
+    return lambda: probe_video(tmp_path / "video.mp4")
+
+
+TIMES = [(i, i / 30 + 1e-4 * (i % 3)) for i in range(600)]
+
+
+@pytest.mark.parametrize("times, phrase", [
+    ([(i, t * 1000) for i, t in TIMES], "is it in ms"),
+    ([(i, t + 1.7e9) for i, t in TIMES], "epoch or device clock"),
+])
+def test_video_timestamps_off_the_session_clock_are_refused(tmp_path, times, phrase):
+    """Times in ms passed as a 5.5-hour video at 0.03 fps (fuse: an internal error, a
+    broadcast ValueError); epoch times as a session starting 54 years late (fuse: 'no
+    detection falls inside the IMU recording', blaming detections.csv)."""
+    from armtrack_cli.core.errors import VideoError
+
+    probe = _video_with_times(tmp_path, "frame,t\n" + "".join(f"{i},{t:.6f}\n"
+                                                              for i, t in times))
+    with pytest.raises(VideoError, match=phrase) as e:
+        probe()
+    assert "video_timestamps.csv" in str(e.value)
+
+
+@pytest.mark.parametrize("text", [
+    "# written by the camera driver\nframe,t\n" + "".join(f"{i},{t:.6f}\n" for i, t in TIMES),
+    "frame\tt\n" + "".join(f"{i}\t{t:.6f}\n" for i, t in TIMES),
+])
+def test_video_timestamps_with_a_comment_or_tabs(tmp_path, text):
+    v = _video_with_times(tmp_path, text)()
+    np.testing.assert_array_equal(v.t, np.round([t for _, t in TIMES], 6))
+    assert v.timestamps_from == "video_timestamps.csv"
