@@ -207,6 +207,10 @@ def _camera(path: Path, root: Path, table: Any) -> CameraConfig:
 def _imu(path: Path, root: Path, table: Any) -> ImuConfig:
     sec = _Section(path, "imu", table, ("file", "forearm_axis", "rate_hz", "topic", "field"))
     f = sec.string("file", required=True)
+    raw = sec.table.get("forearm_axis")
+    if isinstance(raw, str) and raw.strip().lower() in ("x", "y", "z"):  # no sign: never guess
+        sec.fail("forearm_axis", f"= {raw!r} has no sign", f"write '+{raw.strip().lower()}' or "
+                 f"'-{raw.strip().lower()}': the direction from the elbow towards the hand")
     axis = sec.string("forearm_axis", default="+y", choices=AXES)
     rate = sec.number("rate_hz", lo=1.0, hi=10000.0, unit="Hz")
     topic = sec.string("topic")
