@@ -47,3 +47,29 @@ def test_distinct_names_still_go_to_their_own_folders(lab, tmp_path):
     assert r.exit_code == 0, r.output
     assert (out / "pre" / "camera.yaml").is_file()
     assert (out / "S02-pre" / "camera.yaml").is_file()
+
+
+@pytest.mark.parametrize("name", ["Session.toml", "session.toml.txt", "session (1).toml"])
+def test_a_misnamed_session_toml_in_a_folder_of_sessions_fails_aloud(tmp_path, name):
+    """A folder of sessions took only subfolders holding session.toml: one saved as
+    Session.toml or session.toml.txt was skipped in silence (exit 0, with one other session
+    not even a summary line). Now it is a session that fails, naming the file."""
+    lab = tmp_path / "lab"
+    for sub in ("a", "b"):
+        shutil.copytree(REPO / "sample_sessions" / "reach-01", lab / sub)
+    (lab / "b" / "session.toml").rename(lab / "b" / name)
+    r = run_cli("calibrate", lab)
+    assert r.exit_code == 1
+    assert r.stdout.strip().splitlines()[-1] == "2 sessions: 1 done, 1 failed"
+    assert f"b/session.toml: not found, but the folder holds '{name}'" in r.stderr
+    assert (lab / "a" / "armtrack" / "camera.yaml").is_file()
+    assert not (lab / "b" / "armtrack").exists()
+
+
+def test_other_subfolders_are_still_not_sessions(tmp_path):
+    lab = tmp_path / "lab"
+    shutil.copytree(REPO / "sample_sessions" / "reach-01", lab / "a")
+    (lab / "notes").mkdir()
+    (lab / "notes" / "settings.toml").write_text("")
+    r = run_cli("calibrate", lab)
+    assert r.exit_code == 0, r.output

@@ -10,6 +10,7 @@ import sys
 import click
 
 from armtrack_cli.core.errors import ArmtrackError
+from armtrack_cli.session.files import misnamed_session_toml
 
 
 def emit(result: dict, as_json: bool, lines: list[str]) -> None:
@@ -55,7 +56,8 @@ def expand(items) -> list[str]:
     for item in items:
         if os.path.isdir(item) and not os.path.exists(os.path.join(item, "session.toml")):
             subs = sorted(os.path.join(item, d) for d in os.listdir(item)
-                          if os.path.isfile(os.path.join(item, d, "session.toml")))
+                          if os.path.isfile(os.path.join(item, d, "session.toml"))
+                          or misnamed_session_toml(os.path.join(item, d)))  # its error told
             out.extend(subs or [item])
         else:
             out.append(item)
