@@ -18,7 +18,7 @@ from armtrack_cli.detect.palm_blobs import PalmBlobDetector
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.session.camera_yaml import read_camera_yaml, write_camera_yaml
 from armtrack_cli.session.config import Session, load_session, require
-from armtrack_cli.session.depth import count_depth_frames, depth_path, read_depth_frame
+from armtrack_cli.session.depth import count_depth_frames, read_depth_frame
 from armtrack_cli.session.images import read_images
 from armtrack_cli.session.outputs import output_set
 from armtrack_cli.session.palm_toml import write_palm_toml
@@ -111,7 +111,7 @@ def calibrate(path: str | Path, *, frame: int = 0, markers_px: np.ndarray | None
                             link_m=session.palm.link_m, angle_deg=fit.angle_deg,
                             position_H=fit.position_H, pixels=px,
                             link_residual_m=fit.link_residual_m, frame=frame,
-                            depth=depth_path(session.root, frame).exists())
+                            depth=read_depth_frame(session.root, frame) is not None)
             result["palm_toml"] = str(dest / "palm.toml")
             result["palm_link_residual_cm"] = [round(float(v) * 100, 2)
                                                for v in fit.link_residual_m]
