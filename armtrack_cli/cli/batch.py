@@ -10,6 +10,7 @@ import sys
 import click
 
 from armtrack_cli.core.errors import ArmtrackError
+from armtrack_cli.session.files import misnamed_session_toml
 
 
 def emit(result: dict, as_json: bool, lines: list[str]) -> None:
@@ -55,7 +56,8 @@ def expand(items) -> list[str]:
     for item in items:
         if os.path.isdir(item) and not os.path.exists(os.path.join(item, "session.toml")):
             subs = sorted(os.path.join(item, d) for d in os.listdir(item)
-                          if os.path.isfile(os.path.join(item, d, "session.toml")))
+                          if os.path.isfile(os.path.join(item, d, "session.toml"))
+                          or misnamed_session_toml(os.path.join(item, d)))  # its error told
             out.extend(subs or [item])
         else:
             out.append(item)
@@ -63,12 +65,29 @@ def expand(items) -> list[str]:
 
 
 def out_for(out_dir, folder, sessions) -> str | None:
-    """--out DIR: that folder for one session; DIR/SESSION_NAME for several."""
+    """--out DIR: that folder for one session; DIR/SESSION_NAME for several, which must
+    differ: two sessions of one folder name (S01/pre and S02/pre) would share a work folder,
+    the second taking the first's outputs as its own."""
     if out_dir is None:
         return None
-    if len(expand(sessions)) == 1:
+    folders = expand(sessions)
+    if len(folders) == 1:
         return out_dir
-    return os.path.join(out_dir, os.path.basename(str(folder).rstrip("/")))
+    seen: dict[str, str] = {}
+    for f in folders:
+        other = seen.setdefault(_name(f), f)
+        if other != f:
+            same = os.path.realpath(other) == os.path.realpath(f)
+            raise click.BadParameter(
+                f"{other} is given twice" if same else
+                f"sessions {other} and {f} would share the work folder "
+                f"{os.path.join(out_dir, _name(f))}; give them folder names of their own, or "
+                "run each with its own --out", param_hint="--out")
+    return os.path.join(out_dir, _name(folder))
+
+
+def _name(folder) -> str:
+    return os.path.basename(os.path.abspath(str(folder)))
 
 
 class progress:

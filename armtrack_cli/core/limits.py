@@ -13,6 +13,8 @@ MAX_PARTICLES = 1_000_000  # ≈ 1 GB of particle arrays; 50,000 already runs in
 MAX_BOARD_SQUARES = 10_000  # a ChArUco board of more squares is a typo, not a board
 MAX_PIXEL_MARGIN = 0.5  # detections may lie outside the image by this share of its size
 MAX_SESSION_S = 24 * 3600.0  # a stream longer than a day is a broken clock, not a session
+MAX_OFFSET_S = 3600.0  # a clock offset (and so a video clock's start) beyond an hour: another clock
+VIDEO_FPS = (1.0, 1000.0)  # frames/s a session's video_timestamps.csv may tick at
 
 SETTINGS = {  # recipe section.key -> (low, high)
     "calibrate.max_error_px": (1e-4, 50.0),

@@ -16,7 +16,8 @@ instead of a wandering one, whose gravity leak Ē × g is a constant acceleratio
 velocity drift that any drift model absorbs without absorbing the motion. No trend is fitted
 beside a: the reported error's own slow wander would pass into it (a gyro bias, which a trend
 would model, is compensated on board in MTw-class sensors). Where the gyro is missing (NaN)
-the step turns as the reported orientation does.
+the step turns as the reported orientation does, and so does a step across dropped packets
+(longer than 10 sample periods), whose rates are unknown.
 """
 
 from __future__ import annotations
@@ -32,12 +33,24 @@ def gyro_steps(t: np.ndarray, gyr_B: np.ndarray) -> np.ndarray:
     return quat.from_rotvec(0.5 * (gyr_B[1:] + gyr_B[:-1]) * np.diff(t)[:, None])
 
 
+GAP_PERIODS = 10  # a step this many sample periods long spans dropped packets (module doc)
+
+
+def gap_steps(t: np.ndarray) -> np.ndarray:
+    """(M − 1,) bool: the IMU intervals longer than GAP_PERIODS median periods, dropped
+    packets whose rates are unknown: the trapezoid would turn the body through the gap at
+    its edges' mean rate (a 2 s gap in circling put the anchored orientation tens of degrees
+    off for the rest of the session); the sensor's own filter ran through it."""
+    d = np.diff(t)
+    return d > GAP_PERIODS * np.median(d) if d.size else np.zeros(0, bool)
+
+
 def integrate_gyro(t: np.ndarray, q_WB: np.ndarray, gyr_B: np.ndarray) -> np.ndarray:
     """(M, 4) q_0 ⊗ G_k: the gyro's rates (M, 3) rad/s in B, trapezoidal over each step,
-    turning the first reported orientation q_WB[0]; a step without both rates turns as
-    the reported orientations do."""
+    turning the first reported orientation q_WB[0]; a step without both rates, or across
+    dropped packets (gap_steps), turns as the reported orientations do."""
     steps = gyro_steps(t, gyr_B)
-    bad = ~np.isfinite(steps).all(axis=1)
+    bad = ~np.isfinite(steps).all(axis=1) | gap_steps(t)
     if bad.any():  # the reported relative turn q_(k−1)* ⊗ q_k over those steps
         steps[bad] = quat.multiply(quat.conjugate(q_WB[:-1][bad]), q_WB[1:][bad])
     return quat.normalize(prefix_products(np.concatenate([quat.normalize(q_WB[:1]), steps])))

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
-from armtrack_cli.fuse.gyro_orientation import gyro_steps
+from armtrack_cli.fuse.gyro_orientation import gap_steps, gyro_steps
 from armtrack_cli.fuse.models import GRAVITY_W
 from armtrack_cli.fuse.settings import HOLDS
 
@@ -197,11 +197,15 @@ def orientation_track(t_imu: np.ndarray, q_WB: np.ndarray, w_B: np.ndarray,
     orientation q_WB (M, 4) and gyro w_B (M, 3) rad/s at t_imu (M,) s (module docstring).
     The running sums over the IMU's samples are taken at the frames a chunk of samples at a
     time, never held whole (a 60-minute session's ∫R dt alone is 26 MB)."""
+    gaps = gap_steps(t_imu)  # across dropped packets the gyro says nothing: no change there
+
     def rotvec_steps(a: int, b: int) -> np.ndarray:  # Σ rotvec(D_j)'s terms
         dq = gyro_steps(t_imu[a:b + 1], w_B[a:b + 1])  # the body's rotation over each interval
         D = quat.multiply(quat.multiply(q_WB[a + 1:b + 1], quat.conjugate(dq)),
                           quat.conjugate(q_WB[a:b]))
-        return quat.to_rotvec(D)
+        r = quat.to_rotvec(D)
+        r[gaps[a:b]] = 0.0
+        return r
 
     c = _streamed_at(t_imu, t_frames, _running_sums(t_imu, rotvec_steps), (3,))
     G = _streamed_at(t_imu, t_frames, _running_sums(t_imu, _rotation_steps(t_imu, q_WB)), (3, 3))

@@ -18,7 +18,7 @@ from armtrack_cli.detect.palm_blobs import PalmBlobDetector
 from armtrack_cli.pipeline.common import out_dir, resolve_recipe
 from armtrack_cli.session.camera_yaml import read_camera_yaml, write_camera_yaml
 from armtrack_cli.session.config import Session, load_session, require
-from armtrack_cli.session.depth import read_depth_frame
+from armtrack_cli.session.depth import count_depth_frames, read_depth_frame
 from armtrack_cli.session.images import read_images
 from armtrack_cli.session.outputs import output_set
 from armtrack_cli.session.palm_toml import write_palm_toml
@@ -56,7 +56,8 @@ def _palm(session: Session, cam: CameraModel, image: np.ndarray, frame: int,
                                    "give their pixels with --markers, or try another --frame")
     else:
         px = markers_px
-    depth = read_depth_frame(session.root, frame)
+    count_depth_frames(session.root)  # PNGs misnamed: an error, not a palm model without depth
+    depth = read_depth_frame(session.root, frame, (cam.width, cam.height))
     pts = lift_pixels(cam, px, depth)
     fit = label_palm(pts, p.markers, p.link_m, side=session.meta.side, camera_W=cam.centre_W)
     if fit is None or np.abs(fit.link_residual_m).max() > 0.02:

@@ -50,6 +50,7 @@ class Prepared:
     q_anchored: np.ndarray | None  # (M, 4) inputs.imu's orientations with their wandering
     #                  error replaced by a constant one (fuse/gyro_orientation.py), for the
     #                  arm estimate ([arm] "auto"); None once that is done
+    orientation: str = "file"  # the IMU's orientation_source: "file" or "estimated (…)"
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False
@@ -98,7 +99,7 @@ def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = Fal
                                    imu_period=1.0 / imu.rate_hz)
     inputs = Inputs(steps, uv[frames], quat.interpolate(t_imu, q_imu, t_f[frames]),
                     t=t_f[frames], imu=ImuSamples(t_imu, q_imu, imu.acc[ok], imu.gyr[ok]))
-    return Prepared(t_f, frames, inputs, proj, arm, how, q_anch)
+    return Prepared(t_f, frames, inputs, proj, arm, how, q_anch, imu.orientation_source)
 
 
 def _initial_state(session: Session, p: Prepared, s) -> tuple[np.ndarray, np.ndarray, str]:
@@ -111,11 +112,22 @@ def _initial_state(session: Session, p: Prepared, s) -> tuple[np.ndarray, np.nda
             raise ConfigError(session.toml_path, f"[arm] cannot explain the first detection: its "
                               f"camera ray passes {miss * 100:.0f} cm outside the arm's reach "
                               f"from shoulder_m = {session.arm.shoulder_m.tolist()}",
-                              "check shoulder_m (in W, metres) and the arm lengths")
+                              "check shoulder_m (in W, metres) and the arm lengths"
+                              + _estimated_heading(p.orientation))
     x0 = np.zeros(6)
     x0[:3], how = models.initial_wrist(p.projection, inp.z[0], arm=p.arm, q_WB=inp.q_WB[0],
                                        plane_height_m=s.init_plane_m)
     return x0, np.diag([s.init_pos_sigma_m**2] * 3 + [s.init_vel_sigma_m_s**2] * 3), how
+
+
+def _estimated_heading(orientation: str) -> str:
+    """The arm error's second suspect when the IMU file has no orientation: one estimated
+    from gyro + accelerometer has no heading of its own but the sensor's at the start."""
+    if not orientation.startswith("estimated") or "mag" in orientation:
+        return ""
+    return ("; or the IMU's orientation: the file has none, and one estimated from gyro + "
+            "accelerometer takes the sensor's start as W's heading (SESSION_FORMAT.md), "
+            "so the sensor must start with its axes along W's")
 
 
 def fuse(path: str | Path, *, method: str | None = None, particles: int | None = None,

@@ -31,7 +31,7 @@ from armtrack_cli.pipeline.kinematics import (
 )
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, require
-from armtrack_cli.session.depth import depth_path, read_depth_frame
+from armtrack_cli.session.depth import count_depth_frames, depth_path, read_depth_frame
 from armtrack_cli.session.groundtruth import body_rotation_W, read_markers
 from armtrack_cli.session.outputs import output_set, write_table
 from armtrack_cli.session.palm_io import read_palm_blobs, read_palm_toml
@@ -58,11 +58,15 @@ def palm_kinematics(traj: pd.DataFrame, session: Session) -> pd.DataFrame:
     return pd.concat([kin, pd.DataFrame(rows, columns=kin.columns)], ignore_index=True)
 
 
-def _blob_depths(session: Session, blobs: list[np.ndarray], use: bool) -> list[np.ndarray]:
+def _blob_depths(session: Session, blobs: list[np.ndarray], use: bool,
+                 size: tuple[int, int]) -> list[np.ndarray]:
     """Each frame's blobs with a 4th column: the depth under them (m), NaN without a frame."""
+    if use:
+        count_depth_frames(session.root)  # PNGs misnamed: an error, not a run without depth
     out = []
     for i, b in enumerate(blobs):
-        z = depth_at(read_depth_frame(session.root, i), b[:, :2]) if use and len(b) else None
+        z = depth_at(read_depth_frame(session.root, i, size), b[:, :2]) if use and len(b) \
+            else None
         out.append(np.c_[b, np.full(len(b), np.nan) if z is None else z])
     return out
 
@@ -81,10 +85,11 @@ def fuse_palm(session: Session, dest: Path, doc: dict, where: str) -> dict[str, 
     if not 0 <= palm.frame < video.n_frames:
         raise DataError(dest / "palm.toml", f"is from frame {palm.frame}, but the video has "
                         f"{video.n_frames} frames", "run `armtrack calibrate SESSION` again")
+    size = (video.width, video.height)
     blobs = _blob_depths(session, read_palm_blobs(dest / "detections.csv", video.n_frames),
-                         s.depth_updates)
+                         s.depth_updates, size)
     dpath = depth_path(session.root, palm.frame)
-    z = depth_at(read_depth_frame(session.root, palm.frame), palm.pixels)
+    z = depth_at(read_depth_frame(session.root, palm.frame, size), palm.pixels)
     init = initial_pose(palm.position_H, palm.pixels, z, K=cam.K, dist=cam.dist,
                         sigma_px=s.pixel_sigma, sigma_z=s.depth_sigma_m)  # eq. 13-20
     rig = Rig(cam.K, cam.dist, init.R_CW0, init.T_CW0, palm.position_H)

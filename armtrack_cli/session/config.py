@@ -15,7 +15,7 @@ import numpy as np
 
 from armtrack_cli.core.errors import ConfigError, did_you_mean
 from armtrack_cli.core.limits import MAX_BOARD_SQUARES
-from armtrack_cli.session.files import read_small_text
+from armtrack_cli.session.files import misnamed_session_toml, read_small_text
 from armtrack_cli.session.point_expr import point_markers
 from armtrack_cli.session.session_types import (  # noqa: F401  (re-exported for the stages)
     ArmConfig,
@@ -207,6 +207,10 @@ def _camera(path: Path, root: Path, table: Any) -> CameraConfig:
 def _imu(path: Path, root: Path, table: Any) -> ImuConfig:
     sec = _Section(path, "imu", table, ("file", "forearm_axis", "rate_hz", "topic", "field"))
     f = sec.string("file", required=True)
+    raw = sec.table.get("forearm_axis")
+    if isinstance(raw, str) and raw.strip().lower() in ("x", "y", "z"):  # no sign: never guess
+        sec.fail("forearm_axis", f"= {raw!r} has no sign", f"write '+{raw.strip().lower()}' or "
+                 f"'-{raw.strip().lower()}': the direction from the elbow towards the hand")
     axis = sec.string("forearm_axis", default="+y", choices=AXES)
     rate = sec.number("rate_hz", lo=1.0, hi=10000.0, unit="Hz")
     topic = sec.string("topic")
@@ -323,6 +327,10 @@ def load_session(folder: str | Path) -> Session:
     if not root.is_dir():
         raise ConfigError(root, "is not a session folder",
                           "give the folder that holds session.toml")
+    near = misnamed_session_toml(root) if not path.exists() else None
+    if near is not None:
+        raise ConfigError(path, f"not found, but the folder holds {near!r}",
+                          "rename it session.toml (lower case, no other extension)")
     text = read_small_text(path, ConfigError, "a session.toml", hint="a session folder needs a "
                            "session.toml (see docs/recording-guide.md)")
     if not text.strip():

@@ -51,3 +51,17 @@ def read_small_text(path: str | Path, error: type[ArmtrackError], what: str, *,
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise error(path, f"is not a text file (not UTF-8), expected {what}") from None
+
+
+def misnamed_session_toml(folder: str | Path) -> str | None:
+    """The name of a file in ``folder`` that was meant as its session.toml (Session.toml,
+    session.toml.txt as Windows saves it, session (1).toml), or None: a folder of sessions
+    must not skip it in silence."""
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return None
+    if "session.toml" in names:
+        return None
+    near = sorted(n for n in names if n.lower().startswith("session") and ".toml" in n.lower())
+    return near[0] if near else None

@@ -24,11 +24,14 @@ GROUPS = (("t",), ("ax", "ay", "az"), ("gx", "gy", "gz"), ("mx", "my", "mz"), ("
 
 
 def looks_like_generic_csv(lines: list[str]) -> bool:
+    """A header that starts t and names ax, or names every required column in any order
+    (a lab's export may add an index or a temperature column, or quote its names)."""
     for ln in lines[:50]:
         if ln.startswith("#") or not ln.strip():
             continue
-        cells = [c.strip().lower() for c in ln.replace(";", ",").replace("\t", ",").split(",")]
-        return bool(cells) and cells[0] == "t" and "ax" in cells
+        cells = [c.strip().strip('"').lower()
+                 for c in ln.replace(";", ",").replace("\t", ",").split(",")]
+        return bool(cells) and ((cells[0] == "t" and "ax" in cells) or set(REQUIRED) <= set(cells))
     return False
 
 

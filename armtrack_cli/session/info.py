@@ -20,6 +20,7 @@ from armtrack_cli.core.streams import ImuSamples, MarkerTrajectories, VideoStrea
 from armtrack_cli.session.arm_file import read_arm_estimate
 from armtrack_cli.session.camera_yaml import read_camera_yaml
 from armtrack_cli.session.config import Session, load_session
+from armtrack_cli.session.depth import count_depth_frames
 from armtrack_cli.session.groundtruth import read_markers
 from armtrack_cli.session.images import IMAGE_EXT
 from armtrack_cli.session.imu import missing_channels, read_imu
@@ -135,10 +136,9 @@ def describe(session: Session, *, imu_rate_hz: float | None = None,
     if cam is not None and cam.video is not None:
         out["video"] = describe_video(probe_video(cam.video))
         have.add("video")
-        depth = session.root / "depth"
-        if depth.is_dir():
-            out["depth"] = {"folder": str(depth),
-                            "frames": len([p for p in depth.iterdir() if p.suffix == ".png"])}
+        n_depth = count_depth_frames(session.root)
+        if n_depth is not None:
+            out["depth"] = {"folder": str(session.root / "depth"), "frames": n_depth}
             have.add("depth")
     if cam is not None and cam.intrinsics is not None:
         if cam.intrinsics.is_dir():

@@ -64,7 +64,7 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     if at >= len(lines):
         raise GroundTruthError(path, "has a header but no data (truncated export?)")
     m = len(names)
-    has_row = lines[at].split("\t")[0].strip().lower() == "frame"
+    has_row = _names_row(lines[at])
 
     def groups(header: list[str]) -> tuple[tuple[int, ...], ...]:
         """The frame and time columns and the coordinates', each read into its own array:
@@ -79,9 +79,10 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
         fake = [f"c{k}" for k in range(len(lines[at].rstrip("\t\r\n").split("\t")))]
         tab = parse_rows(path, lines, at, fake, "\t", GroundTruthError, groups=groups)
     frame_col, time_col, first = _layout(tab.header, has_row, m)
-    if not has_row and first not in (0, 1, 2):
+    if (first not in (0, 1, 2)) if not has_row else (len(tab.header) - first != 3 * m):
         raise GroundTruthError(path, f"line {at + 1} has {len(tab.header)} columns, which does "
-                               f"not fit {m} markers (MARKER_NAMES) x 3 coordinates",
+                               f"not fit {m} markers (MARKER_NAMES) x 3 coordinates"
+                               + (f" after {first} frame/time columns" if has_row else ""),
                                "is MARKER_NAMES complete?")
     coords = tab.block(tuple(range(first, len(tab.header))))
     far = (coords > MAX_MARKER_MM) | (coords < -MAX_MARKER_MM)  # ±inf too; NaN (a gap) not
@@ -100,6 +101,17 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
     if n_frames is not None and n_frames.isdigit() and int(n_frames) != xyz.shape[0]:
         notes.append(f"NO_OF_FRAMES says {n_frames}, the table has {xyz.shape[0]} rows")
     return MarkerTrajectories(str(path), t, names, xyz, freq, tuple(notes))
+
+
+def _names_row(line: str) -> bool:
+    """Whether the table's first line names its columns: ``Frame Time R_SHO X …``, or
+    ``R_SHO X …`` alone when frame and time were not exported; not a number."""
+    cell = line.split("\t")[0].strip()
+    try:
+        float(cell)
+    except ValueError:
+        return cell != ""
+    return False
 
 
 def _layout(header: list[str], has_row: bool, m: int) -> tuple[int | None, int | None, int]:

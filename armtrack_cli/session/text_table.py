@@ -126,7 +126,8 @@ def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | N
     ragged row, or a cell that is not a number, is an error naming its line (and column).
     With ``groups`` (the header -> tuples of column indices), only those columns are kept,
     each group in its own array (TextTable.groups)."""
-    header = split_row(lines[header_at], delimiter)
+    header = [h[1:-1] if len(h) > 1 and h[0] == h[-1] == '"' else h  # R's write.csv quotes
+              for h in split_row(lines[header_at], delimiter)]
     while header and header[-1] == "":
         header.pop()
     if not header:

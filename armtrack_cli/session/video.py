@@ -16,10 +16,11 @@ import cv2
 import numpy as np
 
 from armtrack_cli.core.errors import VideoError
+from armtrack_cli.core.limits import MAX_OFFSET_S, VIDEO_FPS
 from armtrack_cli.core.streams import VideoStream
 from armtrack_cli.session import imu_mcap
 from armtrack_cli.session.files import regular_file
-from armtrack_cli.session.text_table import parse_table, read_text_lines
+from armtrack_cli.session.text_table import parse_table, read_text_lines, sniff_delimiter
 
 IMAGE_SCHEMAS = ("sensor_msgs/msg/CompressedImage", "foxglove.CompressedImage")
 
@@ -34,7 +35,12 @@ def _capture(path: Path) -> cv2.VideoCapture:
 
 def read_timestamps(path: Path, n_frames: int) -> np.ndarray:
     lines = read_text_lines(path, VideoError, "video_timestamps.csv (frame,t)")
-    tab = parse_table(path, lines, 0, ",", VideoError)
+    at = next((i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#")), None)
+    if at is None:
+        raise VideoError(path, "holds only comments", "its header is frame,t")
+    delim = sniff_delimiter(lines[at])  # a camera driver's may be tab-separated
+    tab = parse_table(path, lines, at, delim if delim in ("\t", ";") else ",", VideoError,
+                      skip_prefixes=("#",))
     if not tab.has("frame", "t"):
         raise VideoError(path, f"has columns {','.join(tab.header)}, expected frame,t")
     frame, t = tab.columns("frame")[:, 0], tab.columns("t")[:, 0]
@@ -48,7 +54,21 @@ def read_timestamps(path: Path, n_frames: int) -> np.ndarray:
                          f"{t[r]:g})")
     if frame.size != n_frames:
         raise VideoError(path, f"lists {frame.size} frames but the video has {n_frames}")
+    _check_clock(path, t)
     return t
+
+
+def _check_clock(path: Path, t: np.ndarray) -> None:
+    """t is the session clock, in seconds: times in ms or µs, or an epoch or device clock,
+    would pass as a video hours long or starting hours late, which no offset can meet."""
+    step = float(np.median(np.diff(t))) if t.size > 1 else 1.0 / VIDEO_FPS[0]
+    if not VIDEO_FPS[0] <= 1.0 / step <= VIDEO_FPS[1]:
+        raise VideoError(path, f"t steps by {step:g} per frame, {1.0 / step:g} frames/s",
+                         "t is in seconds (is it in ms?)")
+    if abs(t[0]) > MAX_OFFSET_S:
+        raise VideoError(path, f"t starts at {t[0]:g} s; it is the session clock, seconds from "
+                         "the recording's start", "subtract the first frame's time (is it an "
+                         "epoch or device clock?)")
 
 
 def probe_video(path: str | Path, *, topic: str | None = None) -> VideoStream:

@@ -136,7 +136,7 @@ CASES: dict[str, tuple[str, dict, str, str]] = {
     "toml-bad-side": ('[session]\nside = "both"\n' + IMU_TOML, {"imu.txt": XSENS}, "session.toml",
                       "[session] side = 'both'"),
     "toml-bad-axis": (IMU_TOML + 'forearm_axis = "y"\n', {"imu.txt": XSENS}, "session.toml",
-                      "forearm_axis = 'y' is not one of"),
+                      "forearm_axis = 'y' has no sign"),
     "toml-hsv-range": ('[camera]\npatch = { hsv_low = [0, 140, 90], hsv_high = [200, 255, 255] }\n',
                        {}, "session.toml", "out of OpenCV's HSV range"),
     "toml-to-world": (GT_TOML + "to_world = [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]\n",
