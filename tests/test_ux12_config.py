@@ -26,3 +26,25 @@ def test_forearm_axis_without_a_sign_is_not_given_a_sign(tmp_path, value):
     low = value.lower()
     assert "has no sign" in msg and f"'+{low}' or '-{low}'" in msg
     assert "did you mean" not in msg
+
+
+def test_an_impossible_arm_is_named_when_the_smoother_diverges(tmp_path):
+    """upper_arm_m = 1.0 (a typo for 0.31) on circle-01: the first detection's ray still meets
+    the arm's sphere, but the default method diverges. It printed ten numpy warnings and
+    blamed the detections and the IMU; now one error that names [arm], exit 1, nothing
+    written."""
+    from .conftest import run_cli
+
+    s = tmp_path / "s"
+    shutil.copytree(REPO / "sample_sessions" / "circle-01", s,
+                    ignore=shutil.ignore_patterns("armtrack"))
+    toml = s / "session.toml"
+    text = toml.read_text()
+    assert "upper_arm_m = 0.31" in text
+    toml.write_text(text.replace("upper_arm_m = 0.31", "upper_arm_m = 1.0"))
+    assert run_cli("calibrate", s).exit_code == 0 and run_cli("detect", s).exit_code == 0
+    r = run_cli("fuse", s)
+    assert r.exit_code == 1
+    assert "diverged" in r.stderr and "check [arm]" in r.stderr
+    assert "warning" not in r.stderr.lower()
+    assert not list((s / "armtrack").glob("trajectory-*.csv"))

@@ -177,7 +177,8 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
         k = int(np.flatnonzero(~np.isfinite(est.mean).all(axis=1))[0])
         raise DataError(dest / name, f"{s.method} diverged: its estimate is not finite from "
                         f"t = {p.t_frames[p.frames[k]]:.3f} s; nothing was written",
-                        "check the detections and the IMU, or try another method")
+                        ("check [arm] (shoulder_m, upper_arm_m, forearm_m), " if p.arm else "")
+                        + "check the detections and the IMU, or try another method")
     far = impossible_rows(table, shoulder=p.arm.shoulder if p.arm else None,
                           reach_m=p.arm.L1 + p.arm.L2 + REACH_MARGIN_M if p.arm else None,
                           bound_m=MAX_OBJECT_RANGE_M)
@@ -227,8 +228,10 @@ def _timed_run(s: FuseSettings, p: Prepared, x0: np.ndarray, P0: np.ndarray
         waited.append(time.perf_counter() - t)
 
     start, cpu = time.perf_counter(), time.thread_time()
-    try:
-        est = run(s.method, p.inputs, x0, P0, p.projection, s, p.arm, forward_done=forward_done)
+    try:  # a diverging filter's 0/0s not printed one by one: fuse refuses its result whole
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            est = run(s.method, p.inputs, x0, P0, p.projection, s, p.arm,
+                      forward_done=forward_done)
         elapsed, cpu = time.perf_counter() - start - sum(waited), time.thread_time() - cpu
     finally:  # the offset's check (and its warning) before any error of the filter's
         offset = check.result()
