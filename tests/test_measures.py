@@ -234,3 +234,19 @@ def test_posterior_draws_have_the_stated_sd_correlation_and_smoothness():
     r = np.mean(e[:, :-100] * e[:, 100:]) / np.mean(e**2)  # lag 1 s
     assert r == pytest.approx(np.exp(-1), abs=0.05)
     assert (np.diff(e, axis=1) / 0.01).std() == pytest.approx(np.sqrt(2) * 0.005, rel=0.05)
+
+
+def test_the_session_row_spans_the_frames_measured_not_the_empty_ones():
+    """A filter that left the arm's reach has its rows left empty (fuse): the session's
+    measures are taken from the first to the last frame with a wrist, and its t_start/t_end
+    say so (they gave the trajectory's whole span, 0 to 19.97 s, for measures of its first
+    2.9 s). The closed form: a minimum-jerk reach of D in T, padded by empty rows."""
+    D, T = 0.30, 1.2
+    t, p = mj_reach(D, T)
+    pad = 200  # 2 s of empty rows before and after
+    t_all = np.r_[t[0] - np.arange(pad, 0, -1) / FS, t, t[-1] + np.arange(1, pad + 1) / FS]
+    p_all = np.r_[np.full((pad, 3), np.nan), p, np.full((pad, 3), np.nan)]
+    r = rows_of(Inputs(t=t_all, wrist=p_all, task="reach"))
+    row = r[("wrist_path_length", "session")]
+    assert (row["t_start"], row["t_end"]) == (pytest.approx(t[0]), pytest.approx(t[-1]))
+    assert row["value"] == pytest.approx(D, rel=2e-3)

@@ -181,6 +181,15 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
     return dict(zip(keys, spread_rows(got).tolist()))
 
 
+def _measured_span(inp: Inputs) -> tuple[float, float]:
+    """The session row's window: from the first to the last frame with a wrist, which the
+    measures are taken over (measures/signal.uniform), not the trajectory's empty frames
+    before or after it (a filter that left the arm's reach: its rows left empty)."""
+    seen = np.isfinite(inp.wrist).all(axis=1) & np.isfinite(inp.t)
+    t = inp.t[seen] if seen.any() else inp.t
+    return float(np.nanmin(t)), float(np.nanmax(t))
+
+
 def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None) -> list[dict]:
     """[{measure, segment, value, sd, unit, t_start, t_end}]: value a float or "not computable:
     why"; sd the posterior uncertainty (NaN where the filter gives no SD or the draws do not
@@ -194,7 +203,7 @@ def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None
     keys = sorted(vals, key=lambda k: (k[1] != "session", int(k[1]) if k[1].isdigit() else 0,
                                        order[k[0]]))
     span = {str(n): w for n, w in enumerate(windows, 1)}
-    span["session"] = (float(np.nanmin(inp.t)), float(np.nanmax(inp.t)))
+    span["session"] = _measured_span(inp)
     return [{"measure": m, "segment": seg, "value": vals[(m, seg)],
              "sd": sds.get((m, seg), float("nan")), "unit": CATALOGUE[m],
              "t_start": float(span[seg][0]), "t_end": float(span[seg][1])} for m, seg in keys]
