@@ -122,8 +122,10 @@ def iter_frames(video: VideoStream, decode_from: int = 0
             else:
                 ok, frame = cap.read()
             if not ok:
-                raise VideoError(video.path, f"frame {i} of {video.n_frames} cannot be decoded: the "
-                                 "file is damaged or truncated", "re-export or re-copy the video")
+                raise VideoError(video.path, f"frame {i} of the {video.n_frames} its header states "
+                                 "cannot be decoded: the file is damaged or truncated, or its "
+                                 "header's frame count is wrong (a remuxed file)",
+                                 "re-export or re-copy the video")
             if frame is not None:
                 yield i, float(video.t[i]), frame
             i += 1
