@@ -302,11 +302,15 @@ def estimate_arm(steps: Steps, uv: np.ndarray, q_WB: np.ndarray, t: np.ndarray,
     best = None
     first = uv[np.flatnonzero(np.isfinite(uv).all(1))[0]]
     starts = shoulder_guesses(proj, first) if free[0] else fixed[None, :3]
+    tried = []
     for continuous in (False, True):
         for S0 in starts:
             theta = np.where(free, np.r_[S0, PRIOR_L], fixed)
-            x, r, J = levenberg_marquardt(prob, prob.jacobian,
-                                          _initial(steps, uv, f_W, proj, theta, free, continuous))
+            x0 = _initial(steps, uv, f_W, proj, theta, free, continuous)
+            if continuous and any(np.array_equal(x0, x) for x in tried):
+                continue  # the same start as a table one (the wrist on the table throughout)
+            tried.append(x0)
+            x, r, J = levenberg_marquardt(prob, prob.jacobian, x0)
             # a continuous start's minimum replaces one only when 1 more likely (2 in χ²)
             if best is None or r @ r < best[1] @ best[1] - (2.0 if continuous else 0.0):
                 best = (x, r, J)
