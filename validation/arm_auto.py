@@ -7,7 +7,9 @@ defaults have) is simulated, calibrated and detected once; fuse then runs with t
 declared and with the arm "auto", each with the default method and with pf-constraint, and
 compare scores both. Goals (issue 14): shoulder within 2 cm, lengths within 1 cm, wrist RMSE
 within 20 % of the declared-model figure. A control row repeats one circle with an exact IMU
-orientation.
+orientation. Each task and seed is then simulated again with the calibration movement before
+the task (--movement seconds; validation/arm_auto_movement.py), declared, all five "auto" and
+the shoulder alone "auto", in a section of its own.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from armtrack_cli import pipeline  # noqa: E402
 from armtrack_cli.core.errors import ArmtrackError  # noqa: E402
 from armtrack_cli.session.arm_file import read_arm_estimate  # noqa: E402
 from armtrack_cli.simulate.arm_session import ArmSimSettings  # noqa: E402
+from validation import arm_auto_movement as movement  # noqa: E402
 from validation.from_mocap import as_auto  # noqa: E402
 
 TASKS = ("circle", "rectangle", "reach", "figure8")
@@ -164,7 +167,8 @@ HEADER = ["| session | arm-smoother wrist RMSE, declared arm (cm) | … auto arm
           "|" + "---|" * 19]
 
 
-def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> None:
+def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int,
+          moved: dict | None = None) -> None:
     ok = [r for _, r in rows if "error" not in r and not _ == "control"]
     sh = [float(np.linalg.norm(r["d_shoulder"])) for r in ok]
     fit = [float(np.linalg.norm(r["d_shoulder_fit"])) for r in ok]
@@ -216,8 +220,22 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int) -> N
            f"({len(concave)} sessions; on the others some direction shows no curvature)."
            if concave else "the log-likelihood shows no curvature in at least one direction "
            "at 2-SD steps on every session."),
-        "", taped_line(ok), "", reading(ok), ""]
+        "", taped_line(ok), "", reading(ok), "", *movement_section(rows, moved or {})]
     out.write_text("\n".join(lines))
+
+
+def movement_section(rows: list[tuple[str, dict]], moved: dict) -> list[str]:
+    """Each session without and with the calibration movement (validation/arm_auto_movement)."""
+    if not moved:
+        return []
+    plain = [(n, movement.from_plain(r)) for n, r in rows if n in moved]
+    return ["## With the calibration movement", "", movement.INTRO.format(
+        s=movement.MOVEMENT_S), "", *movement.HEADER,
+        *(ln for n, r in plain for ln in (movement.line(n, r, "none"), movement.line(
+            n, moved[n], f"{movement.MOVEMENT_S:g} s"))), "",
+        movement.summary([r for _, r in plain], "Without the movement"), "",
+        movement.summary(list(moved.values()), "With it"), "",
+        movement.reading([r for _, r in plain], list(moved.values())), ""]
 
 
 def taped_line(ok: list[dict]) -> str:
@@ -299,7 +317,20 @@ def reading(ok: list[dict]) -> str:
         "circles, rectangles and figure-eights (the reaches: shoulder "
         f"{_span([v for v, r in zip(taped, ok) if r['name'].startswith('reach')])} cm). A "
         "calibration movement that sweeps the forearm and upper arm through their range, so "
-        "that the elbow covers more of its sphere, is what the goal would need.")
+        "that the elbow covers more of its sphere, is what the goal would need: the section "
+        "below measures one.")
+
+
+def moved_row(folder: Path, s: ArmSimSettings, seconds: float) -> dict:
+    """The session ``s`` with the calibration movement before its task, declared and auto."""
+    movement.MOVEMENT_S = seconds
+    pipeline.simulate(folder, movement.with_movement(s, seconds))
+    try:
+        row = movement.movement_row(folder, s, _wrist, _auto_copy)
+    except ArmtrackError as e:
+        row = {"error": str(e).replace(str(folder.parent) + "/", "")}
+    print(movement.line(folder.name, row, f"{seconds:g} s"), flush=True)
+    return row
 
 
 def main() -> None:
@@ -307,6 +338,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--tasks", default=",".join(TASKS))
     ap.add_argument("--out", default=str(REPO / "docs" / "validation-arm-auto.md"))
+    ap.add_argument("--movement", type=float, default=movement.MOVEMENT_S,
+                    help="seconds of the calibration movement for the rows with it (0: none)")
     args = ap.parse_args()
     t0 = time.perf_counter()
     rows = []
@@ -324,7 +357,9 @@ def main() -> None:
                 rows.append((name, {"error": str(e).replace(tmp + "/", "")}))
             rows[-1][1]["name"] = name
             print(line(name, rows[-1][1]), flush=True)
-    write(Path(args.out), rows, time.perf_counter() - t0, args.seeds)
+        moved = {name: moved_row(Path(tmp) / f"{name}-moved", s, args.movement)
+                 for name, s in runs[:-1] if args.movement > 0}
+    write(Path(args.out), rows, time.perf_counter() - t0, args.seeds, moved)
     print(f"wrote {args.out}")
 
 

@@ -314,6 +314,10 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
               help="Arm tasks: the other arm, in a sleeve of the patch's hue, crossing over and "
               "near the patch from 3 s on.")
 @click.option("--clutter", is_flag=True, help="Arm tasks: objects of many colours on the table.")
+@click.option("--calibration-movement", "calibration_s", type=Finite(0.0, 60.0), default=0.0,
+              metavar="SECONDS", help="Arm tasks: SECONDS of the calibration movement for "
+              "[arm] \"auto\" (docs/recording-guide.md) after the first rest, then the task, "
+              "all within --duration (e.g. --duration 28 --calibration-movement 8).")
 @click.option("--occlusion", "occlusions", multiple=True, metavar="START:DURATION",
               help="A card hides the patch from START for DURATION seconds (repeatable).")
 @click.option("--no-distortion", is_flag=True, help="An ideal pinhole lens.")
@@ -338,9 +342,9 @@ def export(sessions, fmt, methods, as_json, out_dir) -> None:
 @out_option
 def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_bias, gyro_noise,
              gyro_bias, orientation_rms_deg, drop_rate, fps, imu_rate, qualisys_hz, gt_gaps,
-             distractor, moving_distractor, clutter, occlusions, no_distortion, calib_images,
-             recorded, undeclared_imu_offset, hides, clutter2, mocap, static, force, as_json,
-             out_dir) -> None:
+             distractor, moving_distractor, clutter, calibration_s, occlusions, no_distortion,
+             calib_images, recorded, undeclared_imu_offset, hides, clutter2, mocap, static, force,
+             as_json, out_dir) -> None:
     """Write a simulated session folder OUT (session.toml, video, IMU or depth frames,
     Qualisys, intrinsics) and its exact truth beside it as OUT.truth.npz."""
     occ = []
@@ -358,6 +362,8 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
     errors = {"acc_noise": acc_noise, "acc_bias": acc_bias, "gyro_noise": gyro_noise,
               "gyro_bias": gyro_bias, "orientation_rms_deg": orientation_rms_deg}
     target = os.path.join(out_dir, os.path.basename(out)) if out_dir else out
+    if calibration_s and (mocap or task in HAND_TASKS):
+        raise click.UsageError("--calibration-movement is for the arm tasks")
     if static and not mocap:
         raise click.UsageError("--static is the static trial of a --from-mocap recording")
     if mocap:
@@ -380,9 +386,12 @@ def simulate(out, task, seed, duration, imu_format, imu_preset, acc_noise, acc_b
             imu_preset=imu_preset, imu_errors={k: v for k, v in errors.items() if v is not None},
             drop_rate=drop_rate, qualisys_hz=float(qualisys_hz), gt_gaps=gt_gaps,
             distractor=distractor, moving_distractor=moving_distractor, clutter=clutter,
-            occlusions=tuple(occ), distortion=not no_distortion,
+            calibration_s=calibration_s, occlusions=tuple(occ), distortion=not no_distortion,
             declare_imu_offset=not undeclared_imu_offset, calib_images=calib_images,
             **({"recorded": recorded.strftime("%Y-%m-%dT%H:%M:%S")} if recorded else {}))
+    if calibration_s and duration - calibration_s < 4.0:
+        raise click.BadParameter(f"leaves the task under 4 s of the {duration:g} s session",
+                                 param_hint="--calibration-movement")
     n_frames = int(round(duration * fps))
     with progress(n_frames, "rendering", quiet=as_json) as bar:
         result = pipeline.simulate(target, settings, imu_format=imu_format, force=force,

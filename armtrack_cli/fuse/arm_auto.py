@@ -237,9 +237,12 @@ def shoulder_guesses(proj: Projection, uv0: np.ndarray) -> np.ndarray:
                      for a in (0.2, 0.35) for b in (-0.15, 0.0, 0.15)])
 
 
-def _initial(steps: Steps, uv, f_W, proj: Projection, theta: np.ndarray, free) -> np.ndarray:
+def _initial(steps: Steps, uv, f_W, proj: Projection, theta: np.ndarray, free,
+             continuous: bool = False) -> np.ndarray:
     """Start from an arm ``theta``: each wrist where its ray meets the sphere about
-    S + L2·f_k (eq. 15), the meeting nearest the table (the ray's nearest point if it misses)."""
+    S + L2·f_k (eq. 15), the meeting nearest the table (the ray's nearest point if it misses);
+    ``continuous``: from the first frame on, the meeting nearest the previous frame's (a hand
+    lifted off the table, as in the calibration movement, can have both well above it)."""
     n = uv.shape[0]
     idx = np.flatnonzero(np.isfinite(uv).all(1))
     uv_f = np.array([np.interp(np.arange(n), idx, uv[idx, j]) for j in range(2)]).T
@@ -247,6 +250,8 @@ def _initial(steps: Steps, uv, f_W, proj: Projection, theta: np.ndarray, free) -
     near, far, miss = ray_sphere(proj.eye, rays, theta[:3] + theta[4] * f_W, theta[3])
     lo = proj.eye[2] + near * rays[:, 2] < proj.eye[2] + far * rays[:, 2]
     depth = np.where(miss > 0, near, np.where(lo, near, far))  # missed: near = far
+    for k in range(1, n if continuous else 1):
+        depth[k] = near[k] if abs(near[k] - depth[k - 1]) <= abs(far[k] - depth[k - 1]) else far[k]
     p = proj.eye + depth[:, None] * rays
     v = np.gradient(p, np.cumsum(steps.dt), axis=0)
     return np.r_[np.hstack([p, v, np.zeros((n, 3))]).ravel(), np.zeros(3), theta[free]]
@@ -297,12 +302,18 @@ def estimate_arm(steps: Steps, uv: np.ndarray, q_WB: np.ndarray, t: np.ndarray,
     best = None
     first = uv[np.flatnonzero(np.isfinite(uv).all(1))[0]]
     starts = shoulder_guesses(proj, first) if free[0] else fixed[None, :3]
-    for S0 in starts:
-        theta = np.where(free, np.r_[S0, PRIOR_L], fixed)
-        x, r, J = levenberg_marquardt(prob, prob.jacobian,
-                                      _initial(steps, uv, f_W, proj, theta, free))
-        if best is None or r @ r < best[1] @ best[1]:
-            best = (x, r, J)
+    tried = []
+    for continuous in (False, True):
+        for S0 in starts:
+            theta = np.where(free, np.r_[S0, PRIOR_L], fixed)
+            x0 = _initial(steps, uv, f_W, proj, theta, free, continuous)
+            if continuous and any(np.array_equal(x0, x) for x in tried):
+                continue  # the same start as a table one (the wrist on the table throughout)
+            tried.append(x0)
+            x, r, J = levenberg_marquardt(prob, prob.jacobian, x0)
+            # a continuous start's minimum replaces one only when 1 more likely (2 in χ²)
+            if best is None or r @ r < best[1] @ best[1] - (2.0 if continuous else 0.0):
+                best = (x, r, J)
     x, r, J = best
     p, _, dth, _, th = prob.unpack(x)
     dof = max(r.size - x.size, 1)

@@ -44,7 +44,7 @@ def simulate_command(name: str, settings: ArmSimSettings, imu_format: str) -> st
     parts = [f"armtrack simulate {name}"]
     flags = {"task": "--task", "seed": "--seed", "duration_s": "--duration", "fps": "--fps",
              "imu_rate_hz": "--imu-rate", "imu_preset": "--imu-preset", "drop_rate": "--drop-rate",
-             "gt_gaps": "--gt-gaps"}
+             "gt_gaps": "--gt-gaps", "calibration_s": "--calibration-movement"}
     for key, flag in flags.items():
         if getattr(settings, key) != getattr(default, key):
             parts.append(f"{flag} {getattr(settings, key):g}" if isinstance(

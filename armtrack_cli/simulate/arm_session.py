@@ -52,6 +52,8 @@ class ArmSimSettings(CaptureSettings):
     forearm_m: float = 0.27
     centre: tuple[float, float, float] = (0.26, 0.25, 0.07)
     size_m: float = 0.10
+    calibration_s: float = 0.0  # the calibration movement after the first rest (0: none;
+    #                             simulate/calibration_move.py), within duration_s
 
 
 @dataclass(frozen=True)
@@ -115,7 +117,11 @@ def _drops(n: int, rate: float, rng: np.random.Generator) -> np.ndarray:
 def simulate_arm(s: ArmSimSettings) -> ArmSimulation:
     rng = np.random.default_rng(s.seed)
     arm = kinematics.ArmGeometry(np.array(s.shoulder), s.upper_arm_m, s.forearm_m)
-    task = kinematics.Task(s.task, s.duration_s, np.array(s.centre), s.size_m)
+    if s.calibration_s and s.duration_s - s.calibration_s < 2 * kinematics.REST_S + 1.0:
+        raise ValueError(f"a {s.duration_s:g} s session has no room for the task after a "
+                         f"{s.calibration_s:g} s calibration movement")
+    task = kinematics.Task(s.task, s.duration_s, np.array(s.centre), s.size_m,
+                           calibration_s=s.calibration_s)
     cam = default_camera(width=s.width, height=s.height,
                          k1=-0.12 if s.distortion else 0.0, k2=0.03 if s.distortion else 0.0)
     # --- camera frames (the session clock)

@@ -8,11 +8,12 @@ high-order central difference at any instant (exact to ~1e-9 for these smooth pa
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from armtrack_cli.core import quaternion as quat
+from armtrack_cli.simulate import calibration_move
 from armtrack_cli.simulate.tasks import ARM_TASKS
 
 TASKS = ARM_TASKS
@@ -35,6 +36,8 @@ class Task:
     pronation_deg: float = 8.0  # amplitude of the small pronation/supination
     swivel_deg: float = 10.0  # amplitude of the swivel-angle variation
     swivel_rest_deg: float = 50.0  # elbow swung out from its lowest point (arm off the table)
+    calibration_s: float = 0.0  # the calibration movement's length after the first rest (0: none;
+    #                             calibration_move.py); duration_s includes it
 
 
 def min_jerk(s: np.ndarray) -> np.ndarray:
@@ -166,6 +169,19 @@ class ArmState:
     omega_B: np.ndarray  # (N, 3) body angular rate, rad/s
 
 
+def _pose(arm: ArmGeometry, task: Task, t: np.ndarray):
+    """Wrist, swivel and pronation at times t: the task's, with the calibration movement (when
+    the task has one) between the first rest and the task, the task played after it."""
+    C = task.calibration_s
+    if C <= 0:
+        return wrist_path(task, t), swivel(task, t), pronation(task, t)
+    inner = replace(task, duration_s=task.duration_s - C, calibration_s=0.0)
+    tau = calibration_move.task_clock(t, REST_S, C)
+    rest = wrist_path(inner, np.array([REST_S]))[0]
+    dW, dphi = calibration_move.offsets(arm.shoulder, rest, t, REST_S, C)
+    return wrist_path(inner, tau) + dW, swivel(inner, tau) + dphi, pronation(inner, tau)
+
+
 _H = 1e-3  # central-difference step (s)
 _D1 = np.array([1, -8, 0, 8, -1]) / (12 * _H)  # 5-point first derivative, O(h^4)
 _D2 = np.array([-1, 16, -30, 16, -1]) / (12 * _H**2)  # 5-point second derivative, O(h^4)
@@ -175,9 +191,9 @@ def arm_state(arm: ArmGeometry, task: Task, t: np.ndarray, forearm_axis: str = "
     t = np.asarray(t, float)
     offs = np.arange(-2, 3) * _H
     tt = t[None, :] + offs[:, None]  # (5, N)
-    W = wrist_path(task, tt)
-    E = elbow_position(arm, W, swivel(task, tt))
-    q = sensor_orientation(E, W, pronation(task, tt), forearm_axis)
+    W, phi, pro = _pose(arm, task, tt)
+    E = elbow_position(arm, W, phi)
+    q = sensor_orientation(E, W, pro, forearm_axis)
     wrist_vel = np.einsum("k,kni->ni", _D1, W)
     wrist_acc = np.einsum("k,kni->ni", _D2, W)
     elbow_vel = np.einsum("k,kni->ni", _D1, E)
