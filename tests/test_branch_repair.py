@@ -206,3 +206,54 @@ def test_roots_coded_a_chunk_at_a_time_are_those_of_one_pass(monkeypatch):
     got = branch_repair.roots_of(q, roots)
     assert got.dtype == whole.dtype and np.array_equal(got, whole)
     assert {branch_repair.UNSEEN, branch_repair.GRAZING, 0, 1} <= set(got.tolist())
+
+
+def _dipping(swap: tuple[int, int] | None, seed: int = 3, accel_error: float = 0.0):
+    """(truth p, roots, F, b) whose second root lies along each frame's ray from the truth,
+    the roots 20 cm apart but for two dips to 8 cm at frames 100 and 160 (where a ray
+    tangent to a true sphere meets one a centimetre off, lift13); ``swap`` (a, b): the roots'
+    order swapped outside frames a … b − 1, so a wrist on root 1 throughout is the truth
+    there and wrong inside: one run, no grazing frame to cut it."""
+    p, _, F, b = _session(accel_error, seed)
+    k = np.arange(N)
+    gap = 0.2 - 0.12 * (np.exp(-((k - 100) / 8.0) ** 2) + np.exp(-((k - 160) / 8.0) ** 2))
+    other = p + gap[:, None] * p / np.linalg.norm(p, axis=1, keepdims=True)
+    roots = np.stack([p, other], axis=1)
+    if swap is not None:
+        out = np.ones(N, bool)
+        out[swap[0]:swap[1]] = False
+        roots[out] = roots[out][:, ::-1]
+    return p, roots, F, b
+
+
+def test_the_nearest_frames_are_the_gaps_dips_not_its_noise():
+    _, roots, _, _ = _dipping(None)
+    gap = np.linalg.norm(roots[:, 0] - roots[:, 1], axis=1)
+    noisy = gap + 0.004 * np.random.default_rng(5).standard_normal(N)  # mm wobble: no cut
+    assert branch_repair.nearest_frames(gap).tolist() == [100, 160]
+    assert np.abs(branch_repair.nearest_frames(noisy) - [100, 160]).max() <= 2  # the dips'
+    gap[100:103] = np.nan  # no detection at the dip: its neighbours cut, none undetected
+    assert set(branch_repair.nearest_frames(gap).tolist()) <= {99, 103, 160}
+    assert branch_repair.pieces([(0, N, 1), (0, 50, 0)], np.array([100, 160])) == [
+        (0, 100, 1), (100, 160, 1), (160, N, 1)]
+
+
+@pytest.mark.parametrize("accel_error", [0.0, 0.03])
+def test_a_wrong_stretch_cut_only_where_the_roots_come_nearest_is_moved_back(accel_error):
+    """The whole trajectory on root 1, the truth on root 0 over frames 100 … 159, the roots
+    never nearer than 8 cm: one run, which the grazing rule cannot cut (before lift13 nothing
+    moved); cut at the gap's dips, the wrong piece moves back to the truth."""
+    p, roots, F, b = _dipping((100, 160), accel_error=accel_error)
+    X = np.c_[roots[:, 1], np.zeros((N, 3))]
+    assert branch_repair.branch_runs(X[:, :3], roots) == [(0, N, 1)]
+    got, moved = branch_repair.repair(X, roots, _steps(F, b))
+    assert moved == 1
+    assert np.abs(got[:, :3] - p).max() < 1e-12
+
+
+@pytest.mark.parametrize("accel_error", [0.0, 0.03])
+def test_a_right_stretch_cut_where_the_roots_come_nearest_stays(accel_error):
+    p, roots, F, b = _dipping(None, accel_error=accel_error)
+    X = np.c_[p, np.zeros((N, 3))]
+    got, moved = branch_repair.repair(X, roots, _steps(F, b))
+    assert moved == 0 and np.array_equal(got, X)

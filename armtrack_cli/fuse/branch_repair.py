@@ -20,7 +20,14 @@ is well apart is therefore tested as a whole:
 
 A run is moved when the other root's residual is below ``ratio`` times its own, the clearest
 case first (``repair``); so is a chain of runs on the same root cut only by frames where the
-ray grazes the sphere (``candidates``). A wrong
+ray grazes the sphere (``candidates``); and each piece of a run cut where its roots come
+nearest (``nearest_frames``, ``pieces``): with a sphere a centimetre off (a shoulder estimated,
+lift13) a ray tangent to the true sphere cuts the declared one 10-25 cm apart, so the wrist
+changes root there unseen by the grazing rule and a wrong stretch is no run of its own. Across
+such a cut the wrist passes between the roots, on neither: a piece's test leaves CUT_FRAMES
+either side of its cuts out of both misfits, over a window of PIECE_MARGIN, and only pieces
+with that window whole on both sides are tested (its ratio is nearer 1: 0.45-0.66 for the
+wrong pieces of the sessions of lift13, 1.03 and more for the right ones). A wrong
 run bends the path by the roots' gap (centimetres to decimetres) where the IMU's error over a
 second or two is millimetres, so the ratio is far from 1 either way. The arm smoother
 (fuse/arm_smoother.py) does this once, after its first iteration (whose orientation error and
@@ -41,6 +48,12 @@ MIN_GAP_M = 0.02  # the roots this far apart at least on every frame of a run: n
 MARGIN = 15  # frames either side of a run in its window (0.5 s at 30 fps)
 RATIO = 0.8  # move a run when the other root's residual is below this times its own
 MIN_FRAMES = 3  # shorter runs are left alone (a frame or two the next iteration decides)
+NEAREST_HALF = 15  # nearest_frames: the roots' gap least within this many frames either side …
+NEAREST_RISE_M = 0.03  # … and this much larger within twice as many on both: where the ray
+#                        passes nearest a tangent while the wrist's hand is lifted (lift13)
+CUT_FRAMES = 10  # a piece's frames this near its cuts left out of its test (off both roots)
+PIECE_MARGIN = 60  # frames either side of a piece in its window (2 s: its anchors, fewer near
+#                    the cuts, further out; with 15, wrong pieces' ratios were 0.4-1.7, lift13)
 PATH_BLOCK = 1024  # a window's steps built at a time (window_path)
 GRAZING, UNSEEN = -1, -2  # roots_of's codes: roots nearer than MIN_GAP_M, no detection
 ROOT_ROWS = 8192  # frames roots_of codes at a time
@@ -108,6 +121,41 @@ def candidates(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M,
     return out
 
 
+def nearest_frames(gap: np.ndarray, half: int = NEAREST_HALF,
+                   rise: float = NEAREST_RISE_M) -> np.ndarray:
+    """The frames where the roots' gap (n,) m (NaN: no detection) is least within ``half``
+    frames either side and larger by ``rise`` somewhere within 2 ``half`` on each side: the
+    ray's nearest approach to a tangent, where a wrist that meets a sphere slightly off the
+    declared one changes root though the roots stay apart. Frames near the ends, without
+    2 ``half`` on both sides, are not among them (a run's end is a cut already)."""
+    n, w = gap.size, 2 * half
+    if n <= 2 * w:
+        return np.zeros(0, np.int64)
+    g = np.where(np.isfinite(gap), gap, np.nan)
+    lowest = np.nanmin(np.lib.stride_tricks.sliding_window_view(
+        np.where(np.isnan(g), np.inf, g), 2 * half + 1), axis=1)  # frames half … n − half − 1
+    hi = np.where(np.isnan(g), -np.inf, g)
+    win = np.lib.stride_tricks.sliding_window_view(hi, w)  # win[j]: frames j … j + w − 1
+    k = np.arange(w, n - w)  # slices of the view, not its rows gathered: no (n, w) copy
+    before, after = win[:n - 2 * w].max(axis=1), win[w + 1:n - w + 1].max(axis=1)
+    ok = (np.isfinite(g[k]) & (g[k] <= lowest[k - half]) & (before >= g[k] + rise)
+          & (after >= g[k] + rise))
+    return k[ok]
+
+
+def pieces(runs: list[tuple[int, int, int]], cuts: np.ndarray) -> list[tuple[int, int, int]]:
+    """Each run (lo, hi, root) cut at the frames ``cuts`` strictly inside it: its pieces of
+    MIN_FRAMES frames or more, none where no cut falls inside (the run is a candidate as it
+    is)."""
+    out = []
+    for lo, hi, r in runs:
+        inside = cuts[(cuts > lo) & (cuts < hi)]
+        edges = np.r_[lo, inside, hi]
+        out += [(int(a), int(b), r) for a, b in zip(edges[:-1], edges[1:])
+                if inside.size and b - a >= MIN_FRAMES]
+    return out
+
+
 def moved(p: np.ndarray, points: np.ndarray, code: np.ndarray, lo: int, hi: int,
           root: int) -> np.ndarray:
     """Positions p (m, 3) with the stretch lo … hi − 1 moved off ``root``: its frames on that
@@ -145,6 +193,18 @@ def window_path(steps: Steps, lo: int, hi: int, x: np.ndarray,
     return D, tau
 
 
+def piece_ratio(here: np.ndarray, there: np.ndarray, D: np.ndarray, tau: np.ndarray,
+                lo: int, hi: int, cut: int = CUT_FRAMES) -> float:
+    """misfit(there) / misfit(here) over a piece's window (positions (m, 3), the IMU's path D,
+    τ), the piece its frames lo … hi − 1, without the ``cut`` frames either side of lo and of
+    hi: there the wrist crosses between the roots, on neither (``pieces``)."""
+    keep = np.ones(here.shape[0], bool)
+    for c in (lo, hi):
+        keep[max(c - cut, 0):max(c + cut, 0)] = False
+    return misfit(there[keep], D[keep], tau[keep]) / max(
+        misfit(here[keep], D[keep], tau[keep]), 1e-300)
+
+
 def misfit(P: np.ndarray, D: np.ndarray, tau: np.ndarray) -> float:
     """RMS (m) of P (m, 3) − D − (p₀ + v₀ τ) with p₀, v₀ fitted by least squares: the line's
     closed form about the means (v₀ = Σ τ' y' / Σ τ'², τ' = τ − τ̄, y' = y − ȳ; v₀ = 0 when
@@ -177,7 +237,13 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
     X = X if in_place else X.copy()
     code = roots_of(X[:, :3], points, min_gap_m)
     cands = candidates(X[:, :3], points, min_gap_m, root=code)
-    windows = [(max(lo - margin, 0), min(hi + margin, n)) for lo, hi, _ in cands]
+    whole = len(cands)  # those after it: pieces of runs cut where the roots come nearest
+    cands += [(lo, hi, r) for lo, hi, r in pieces(  # anchored on both sides: its test is weaker
+        branch_runs(X[:, :3], points, min_gap_m, root=code),
+        nearest_frames(np.linalg.norm(points[:, 0] - points[:, 1], axis=1)))
+        if lo >= PIECE_MARGIN and hi + PIECE_MARGIN <= n]
+    windows = [(max(lo - m, 0), min(hi + m, n)) for i, (lo, hi, _) in enumerate(cands)
+               for m in [margin if i < whole else PIECE_MARGIN]]
 
     def test(i: int) -> float:
         """The other root's misfit over stretch i's window against its own. The IMU's path
@@ -189,6 +255,8 @@ def repair(X: np.ndarray, points: np.ndarray, steps: Steps, *, min_gap_m: float 
         path = window_path(steps, a + 1, e, X[a])
         here = X[a:e, :3]
         there = moved(here, points[a:e], code[a:e], lo - a, hi - a, r)
+        if i >= whole:
+            return piece_ratio(here, there, *path, lo - a, hi - a)
         return misfit(there, *path) / max(misfit(here, *path), 1e-300)
 
     ratios = np.array([test(i) for i in range(len(cands))])
