@@ -13,6 +13,7 @@ from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.core.streams import ImuSamples
 from armtrack_cli.session.imu_checks import rate_and_dropped, unit_quaternions
 from armtrack_cli.session.text_table import (
+    header_line,
     named_groups,
     parse_table,
     read_text_lines,
@@ -26,13 +27,12 @@ GROUPS = (("t",), ("ax", "ay", "az"), ("gx", "gy", "gz"), ("mx", "my", "mz"), ("
 def looks_like_generic_csv(lines: list[str]) -> bool:
     """A header that starts t and names ax, or names every required column in any order
     (a lab's export may add an index or a temperature column, or quote its names)."""
-    for ln in lines[:50]:
-        if ln.startswith("#") or not ln.strip():
-            continue
-        cells = [c.strip().strip('"').lower()
-                 for c in ln.replace(";", ",").replace("\t", ",").split(",")]
-        return bool(cells) and ((cells[0] == "t" and "ax" in cells) or set(REQUIRED) <= set(cells))
-    return False
+    at = header_line(lines[:50])
+    if at is None:
+        return False
+    cells = [c.strip().strip('"').lower()
+             for c in lines[at].replace(";", ",").replace("\t", ",").split(",")]
+    return bool(cells) and ((cells[0] == "t" and "ax" in cells) or set(REQUIRED) <= set(cells))
 
 
 def check_times(path: Path, t: np.ndarray, line_of: np.ndarray, column: str = "t") -> None:
@@ -54,8 +54,7 @@ def check_times(path: Path, t: np.ndarray, line_of: np.ndarray, column: str = "t
 
 def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSamples:
     lines = lines if lines is not None else read_text_lines(path, ImuFileError, "an IMU CSV")
-    header_at = next((i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#")),
-                     None)
+    header_at = header_line(lines)
     if header_at is None:
         raise ImuFileError(path, "has no header line")
     delim = sniff_delimiter(lines[header_at])

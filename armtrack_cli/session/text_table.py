@@ -103,6 +103,13 @@ def decode_text(path: Path, raw: bytes, error: type[DataError], what: str) -> st
     return text
 
 
+def header_line(lines: list[str], comment: str = "#") -> int | None:
+    """The index of the first line that is neither blank nor a ``comment`` line (a table's
+    header), or None."""
+    return next((i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith(comment)),
+                None)
+
+
 def sniff_delimiter(header: str) -> str | None:
     """Tab, semicolon or comma by count in the header; else " " when the header's names are
     separated by single spaces (MT Manager 2022's space export, whose empty fields are

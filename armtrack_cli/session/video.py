@@ -20,7 +20,12 @@ from armtrack_cli.core.limits import MAX_OFFSET_S, VIDEO_FPS
 from armtrack_cli.core.streams import VideoStream
 from armtrack_cli.session import imu_mcap
 from armtrack_cli.session.files import regular_file
-from armtrack_cli.session.text_table import parse_table, read_text_lines, sniff_delimiter
+from armtrack_cli.session.text_table import (
+    header_line,
+    parse_table,
+    read_text_lines,
+    sniff_delimiter,
+)
 
 IMAGE_SCHEMAS = ("sensor_msgs/msg/CompressedImage", "foxglove.CompressedImage")
 
@@ -35,7 +40,7 @@ def _capture(path: Path) -> cv2.VideoCapture:
 
 def read_timestamps(path: Path, n_frames: int) -> np.ndarray:
     lines = read_text_lines(path, VideoError, "video_timestamps.csv (frame,t)")
-    at = next((i for i, ln in enumerate(lines) if ln.strip() and not ln.startswith("#")), None)
+    at = header_line(lines)
     if at is None:
         raise VideoError(path, "holds only comments", "its header is frame,t")
     delim = sniff_delimiter(lines[at])  # a camera driver's may be tab-separated
