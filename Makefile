@@ -36,8 +36,8 @@ samples: $(STAMP)
 		--drop-rate 0.01 --imu-format mcap --force
 	$(BIN)/armtrack simulate sample_sessions/wrist-rom-01 --task wrist-rom --seed 3 --duration 12 --force
 
-test: $(STAMP)
-	$(BIN)/python -m pytest -q -p no:cacheprovider
+test: $(STAMP)  # the slowest tests listed at the end: where the ~12 minutes go
+	$(BIN)/python -m pytest -q -p no:cacheprovider --durations=15
 
 # The suite against the newest versions pyproject.toml allows, in a venv of its own.
 test-latest:
