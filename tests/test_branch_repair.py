@@ -262,8 +262,8 @@ def test_a_right_stretch_cut_where_the_roots_come_nearest_stays(accel_error):
 def _from_rest(swap: tuple[int, int] | None, accel_error: float = 0.0):
     """As _dipping, but the gap nearly flat up to frame 100 (9 cm falling to 8), then rising
     to 20 cm: a hand lifted from rest, where the ray passes nearest a tangent with nothing
-    3 cm higher before it (lift14: rectangle s1's first lift, 26.8 cm falling to 25.9 over
-    2 s, then rising); a dip to 8 cm at frame 160 as there."""
+    3 cm higher before it (lift14: rectangle s1's first lift, 27.2 cm falling to 25.9 over
+    2.4 s, then rising); a dip to 8 cm at frame 160 as there."""
     p, _, F, b = _session(accel_error)
     k = np.arange(N)
     rising = 0.12 * (1 - np.exp(-(np.maximum(k - 100, 0) / 8.0) ** 2))

@@ -94,7 +94,7 @@ class Smoothed:
     gated: np.ndarray  # (n,) bool, detections not used
     iterations: int
     gyro: bool  # δθ tracked by the gyroscope (state holds b_g) or Gauss–Markov
-    runs_moved: int = 0  # runs of frames moved to the other ray–sphere root (branch_repair)
+    runs_moved: int = 0  # runs moved to the other ray–sphere root, all repairs (branch_repair)
 
 
 def projection_jacobians(proj: Projection, p: np.ndarray) -> np.ndarray:
