@@ -257,3 +257,58 @@ def test_a_right_stretch_cut_where_the_roots_come_nearest_stays(accel_error):
     X = np.c_[p, np.zeros((N, 3))]
     got, moved = branch_repair.repair(X, roots, _steps(F, b))
     assert moved == 0 and np.array_equal(got, X)
+
+
+def _from_rest(swap: tuple[int, int] | None, accel_error: float = 0.0):
+    """As _dipping, but the gap nearly flat up to frame 100 (9 cm falling to 8), then rising
+    to 20 cm: a hand lifted from rest, where the ray passes nearest a tangent with nothing
+    3 cm higher before it (lift14: rectangle s1's first lift, 27.2 cm falling to 25.9 over
+    2.4 s, then rising); a dip to 8 cm at frame 160 as there."""
+    p, _, F, b = _session(accel_error)
+    k = np.arange(N)
+    rising = 0.12 * (1 - np.exp(-(np.maximum(k - 100, 0) / 8.0) ** 2))
+    gap = (0.08 + 0.01 * np.maximum(100 - k, 0) / 100 + rising
+           - 0.12 * np.exp(-((k - 160) / 8.0) ** 2) * (k > 130))
+    other = p + gap[:, None] * p / np.linalg.norm(p, axis=1, keepdims=True)
+    roots = np.stack([p, other], axis=1)
+    if swap is not None:
+        out = np.ones(N, bool)
+        out[swap[0]:swap[1]] = False
+        roots[out] = roots[out][:, ::-1]
+    return p, roots, F, b
+
+
+def test_a_gap_flat_on_one_side_of_its_least_is_cut_there():
+    _, roots, _, _ = _from_rest(None)
+    cuts = branch_repair.nearest_frames(np.linalg.norm(roots[:, 0] - roots[:, 1], axis=1))
+    assert cuts.tolist() == [100, 160]  # not only the two-sided dip at 160
+
+
+@pytest.mark.parametrize("accel_error", [0.0, 0.03])
+def test_a_wrong_stretch_lifted_from_rest_is_moved_back(accel_error):
+    """The whole trajectory on root 1, the truth on root 0 over frames 100 … 159, which start
+    where the gap leaves its flat: before lift14 only the dip at 160 cut the run, its pieces
+    (0, 160) and (160, N) untested (their windows reach past the session's ends), nothing
+    moved; cut where the flat turns, the wrong piece moves back to the truth."""
+    p, roots, F, b = _from_rest((100, 160), accel_error=accel_error)
+    X = np.c_[roots[:, 1], np.zeros((N, 3))]
+    assert branch_repair.branch_runs(X[:, :3], roots) == [(0, N, 1)]
+    got, moved = branch_repair.repair(X, roots, _steps(F, b))
+    assert moved == 1
+    assert np.abs(got[:, :3] - p).max() < 1e-12
+
+
+@pytest.mark.parametrize("accel_error", [0.0, 0.03])
+def test_a_right_stretch_lifted_from_rest_stays(accel_error):
+    p, roots, F, b = _from_rest(None, accel_error=accel_error)
+    X = np.c_[p, np.zeros((N, 3))]
+    got, moved = branch_repair.repair(X, roots, _steps(F, b))
+    assert moved == 0 and np.array_equal(got, X)
+
+
+@pytest.mark.parametrize("iterations, moved_last, most, due", [
+    (1, 0, 10, True), (2, 0, 10, False), (2, 3, 10, True), (5, 1, 10, True), (9, 1, 10, True),
+    (10, 1, 10, False), (1, 0, 1, False)])
+def test_repair_follows_the_first_pass_and_each_after_a_move(iterations, moved_last, most,
+                                                            due):
+    assert arm_smoother.repair_due(iterations, moved_last, most) is due

@@ -94,7 +94,7 @@ class Smoothed:
     gated: np.ndarray  # (n,) bool, detections not used
     iterations: int
     gyro: bool  # δθ tracked by the gyroscope (state holds b_g) or Gauss–Markov
-    runs_moved: int = 0  # runs of frames moved to the other ray–sphere root (branch_repair)
+    runs_moved: int = 0  # runs moved to the other ray–sphere root, all repairs (branch_repair)
 
 
 def projection_jacobians(proj: Projection, p: np.ndarray) -> np.ndarray:
@@ -258,7 +258,8 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
     frames at a time, with the zero-velocity rows of its resting frames (``still``,
     fuse/rest.py) inserted, and only the (p, v) and elbow variances kept (a covariance per
     frame would be 0.4 KB of every frame's 0.6 KB). After the first iteration, runs of frames
-    on the wrong ray–sphere root are moved to the other (``repaired``). Returns X, the (p, v)
+    on the wrong ray–sphere root are moved to the other (``repaired``), and again after each
+    pass that followed a move (``repair_due``; no stop right after a move). Returns X, the (p, v)
     and elbow variances, the gated detections, the iterations run and the runs moved.
     ``start``: [the first trajectory], emptied: each pass writes its smoothed states over it
     as it goes, so one (n, d) trajectory is held, not two. ``scale``: camera_rows.row_scale."""
@@ -268,7 +269,8 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
     rk = s.constraint_sigma_m**2
     var, elbow_var = np.empty((n, 6)), np.empty((n, 3))
     iterations, step, previous, gated, runs = 0, np.inf, np.inf, np.zeros(n, bool), 0
-    while iterations < s.smoother_iterations and not converged(step, previous):
+    last = 0  # runs the latest repair moved
+    while iterations < s.smoother_iterations and (last > 0 or not converged(step, previous)):
         was, moved = {}, []  # a block's first row before this pass wrote it; each block's move
 
         def model(lo: int, hi: int, steps_only: bool = False, was=was, X=X) -> tuple:
@@ -299,13 +301,24 @@ def _iterate(fd, track, period, prior_, start, z, q_hat, proj, s, arm, shoulder,
                                keep=keep)
         previous, step = step, np.max(moved)
         iterations += 1
-        if iterations == 1 < s.smoother_iterations and s.branch_repair and shoulder is None:
-            X, runs = repaired(X, z, q_hat, proj, arm, camera,
+        if repair_due(iterations, last, s.smoother_iterations) and s.branch_repair \
+                and shoulder is None:
+            X, last = repaired(X, z, q_hat, proj, arm, camera,
                                lambda lo, hi: process(_rows(fd, lo, hi), s, None, period,
                                                       None if track is None
                                                       else _rows(track, lo, hi), camera,
                                                       noise=False))
+            runs += last
     return X, var, elbow_var, gated, iterations, runs
+
+
+def repair_due(iterations: int, moved_last: int, most: int) -> bool:
+    """Whether branch repair follows pass ``iterations`` (of at most ``most``): after the
+    first, and again after each pass whose preceding repair moved a run (``moved_last``): that
+    pass fitted the IMU's errors and spheres to the moved runs, and a wrong run the first
+    errors agreed with may now show (lift14: a calibration movement's second lift moved, its
+    first then); never after the last pass (its repair would go unsmoothed)."""
+    return (iterations == 1 or moved_last > 0) and iterations < most
 
 
 def repaired(X: np.ndarray, z: np.ndarray, q_hat: np.ndarray, proj: Projection, arm: Arm,

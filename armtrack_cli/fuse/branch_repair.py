@@ -23,15 +23,18 @@ case first (``repair``); so is a chain of runs on the same root cut only by fram
 ray grazes the sphere (``candidates``); and each piece of a run cut where its roots come
 nearest (``nearest_frames``, ``pieces``): with a sphere a centimetre off (a shoulder estimated,
 lift13) a ray tangent to the true sphere cuts the declared one 10-25 cm apart, so the wrist
-changes root there unseen by the grazing rule and a wrong stretch is no run of its own. Across
-such a cut the wrist passes between the roots, on neither: a piece's test leaves CUT_FRAMES
-either side of its cuts out of both misfits, over a window of PIECE_MARGIN, and only pieces
-with that window whole on both sides are tested (its ratio is nearer 1: 0.45-0.66 for the
-wrong pieces of the sessions of lift13, 1.03 and more for the right ones). A wrong
-run bends the path by the roots' gap (centimetres to decimetres) where the IMU's error over a
-second or two is millimetres, so the ratio is far from 1 either way. The arm smoother
-(fuse/arm_smoother.py) does this once, after its first iteration (whose orientation error and
-bias make the spheres and the IMU's path right), and goes on from the repaired trajectory.
+changes root there unseen by the grazing rule and a wrong stretch is no run of its own (the
+gap's least, rising on one side at least: a hand lifted from rest leaves it flat before,
+lift14). Across such a cut the wrist passes between the roots, on neither: a piece's test
+leaves CUT_FRAMES either side of its cuts out of both misfits, over a window of PIECE_MARGIN,
+and only pieces with that window whole on both sides are tested (its ratio is nearer 1:
+0.45-0.66 for the wrong pieces of the sessions of lift13, 1.03 and more for the right ones).
+A wrong run bends the path by the roots' gap (centimetres to decimetres) where the IMU's
+error over a second or two is millimetres, so the ratio is far from 1 either way. The arm smoother
+(fuse/arm_smoother.py) does this after its first iteration (whose orientation error and
+bias make the spheres and the IMU's path right), and goes on from the repaired trajectory;
+again after each pass that followed a move (arm_smoother.repair_due): errors fitted to a
+wrong stretch can make the IMU agree with it until another stretch has moved (lift14).
 """
 
 from __future__ import annotations
@@ -49,8 +52,9 @@ MARGIN = 15  # frames either side of a run in its window (0.5 s at 30 fps)
 RATIO = 0.8  # move a run when the other root's residual is below this times its own
 MIN_FRAMES = 3  # shorter runs are left alone (a frame or two the next iteration decides)
 NEAREST_HALF = 15  # nearest_frames: the roots' gap least within this many frames either side …
-NEAREST_RISE_M = 0.03  # … and this much larger within twice as many on both: where the ray
-#                        passes nearest a tangent while the wrist's hand is lifted (lift13)
+NEAREST_RISE_M = 0.03  # … and this much larger within twice as many on one side: where the
+#                        ray passes nearest a tangent while the hand is lifted (lift13; both
+#                        sides then, one since lift14: a lift from rest is flat before)
 CUT_FRAMES = 10  # a piece's frames this near its cuts left out of its test (off both roots)
 PIECE_MARGIN = 60  # frames either side of a piece in its window (2 s: its anchors, fewer near
 #                    the cuts, further out; with 15, wrong pieces' ratios were 0.4-1.7, lift13)
@@ -124,10 +128,12 @@ def candidates(p: np.ndarray, points: np.ndarray, min_gap_m: float = MIN_GAP_M,
 def nearest_frames(gap: np.ndarray, half: int = NEAREST_HALF,
                    rise: float = NEAREST_RISE_M) -> np.ndarray:
     """The frames where the roots' gap (n,) m (NaN: no detection) is least within ``half``
-    frames either side and larger by ``rise`` somewhere within 2 ``half`` on each side: the
-    ray's nearest approach to a tangent, where a wrist that meets a sphere slightly off the
-    declared one changes root though the roots stay apart. Frames near the ends, without
-    2 ``half`` on both sides, are not among them (a run's end is a cut already)."""
+    frames either side and larger by ``rise`` somewhere within 2 ``half`` on one side or
+    both: the ray's nearest approach to a tangent, where a wrist that meets a sphere slightly
+    off the declared one changes root though the roots stay apart. One side may be flat: a
+    hand lifted from rest, or come to rest, leaves the gap still on that side (lift14).
+    Frames near the ends, without 2 ``half`` on both sides, are not among them (a run's end
+    is a cut already)."""
     n, w = gap.size, 2 * half
     if n <= 2 * w:
         return np.zeros(0, np.int64)
@@ -138,8 +144,8 @@ def nearest_frames(gap: np.ndarray, half: int = NEAREST_HALF,
     win = np.lib.stride_tricks.sliding_window_view(hi, w)  # win[j]: frames j … j + w − 1
     k = np.arange(w, n - w)  # slices of the view, not its rows gathered: no (n, w) copy
     before, after = win[:n - 2 * w].max(axis=1), win[w + 1:n - w + 1].max(axis=1)
-    ok = (np.isfinite(g[k]) & (g[k] <= lowest[k - half]) & (before >= g[k] + rise)
-          & (after >= g[k] + rise))
+    ok = (np.isfinite(g[k]) & (g[k] <= lowest[k - half])
+          & ((before >= g[k] + rise) | (after >= g[k] + rise)))
     return k[ok]
 
 
