@@ -163,3 +163,11 @@ def test_wrist_angular_speeds_have_their_unit_and_name():
             m = f"wrist_{a}_{k}_speed"
             assert words.with_unit(139.5567, m) == "139.6 °/s"
             assert "angular speed" in words.name(m)
+
+
+def test_a_counts_sd_is_not_rounded_to_zero():
+    """movement units 4 with an SD of 0.36 units printed "4 ± 0" (the count's 0 decimals)."""
+    assert words.sd_number(0.36162, "movement_units") == "0.4"
+    assert words.sd_number(0.008354, "wrist_peak_speed") == "0.008"  # others: their decimals
+    r = report(kinematics=kin([("movement_units", 4.0, 0.36162)]))
+    assert summary.value_text(r, "movement_units") == "4 ± 0.4"

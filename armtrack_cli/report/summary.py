@@ -68,7 +68,7 @@ def value_text(r: SessionReport, measure: str, segment: str = "session") -> str 
                 f"{words.with_unit(lo, measure)} to {words.with_unit(hi, measure)})")
     out = words.with_unit(v, measure)
     if math.isfinite(sd):
-        out += f" ± {words.with_unit(sd, measure)}"
+        out += f" ± {words.sd_with_unit(sd, measure)}"
     return out
 
 

@@ -30,7 +30,7 @@ class Notes:
 
 
 def _sd(x: float, measure: str) -> str:
-    return words.number(x, measure) if math.isfinite(x) else "—"
+    return words.sd_number(x, measure) if math.isfinite(x) else "—"
 
 
 def session_rows(r: SessionReport, notes: Notes) -> list[list[str]]:

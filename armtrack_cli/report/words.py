@@ -73,6 +73,27 @@ def number(value, measure: str) -> str:
     return f"{v:.{d}f}".replace("-", "−")
 
 
+def sd_number(sd, measure: str) -> str:
+    """An SD as printed: the measure's decimals, one at least (a count's SD of 0.36 units is
+    no "± 0", which would say the count is certain)."""
+    try:
+        v = float(sd)
+    except (TypeError, ValueError):
+        return "not computable"
+    if not math.isfinite(v):
+        return "not computable"
+    d = max(MEASURES.get(measure, ("", "", 3))[2], 1)
+    return f"{v:.{d}f}".replace("-", "−")
+
+
+def sd_with_unit(sd, measure: str) -> str:
+    s = sd_number(sd, measure)
+    unit = MEASURES.get(measure, ("", "", 3))[1]
+    if s == "not computable" or not unit:
+        return s
+    return s + unit if unit == "°" else f"{s} {unit}"
+
+
 def with_unit(value, measure: str) -> str:
     s = number(value, measure)
     unit = MEASURES.get(measure, ("", "", 3))[1]
