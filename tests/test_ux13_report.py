@@ -171,3 +171,40 @@ def test_a_counts_sd_is_not_rounded_to_zero():
     assert words.sd_number(0.008354, "wrist_peak_speed") == "0.008"  # others: their decimals
     r = report(kinematics=kin([("movement_units", 4.0, 0.36162)]))
     assert summary.value_text(r, "movement_units") == "4 ± 0.4"
+
+
+def test_compare_json_gives_the_3d_accuracy_with_null_for_no_frames():
+    """`compare --json` named only the CSVs: a CI script had to parse errors.csv for the RMSE."""
+    import json
+
+    from armtrack_cli.compare.errors import accuracy_3d, error_rows
+
+    rng = np.random.default_rng(0)
+    truth_xyz = rng.normal(size=(50, 3))
+    est = truth_xyz + 0.01  # 1 cm on each axis: 3-D error √3 cm on every frame
+    rows = error_rows("arm-smoother", "wrist", est, truth_xyz)
+    rows += error_rows("arm-smoother", "elbow", est, np.full_like(est, np.nan))  # no frame
+    acc = accuracy_3d(rows)
+    assert acc["arm-smoother"]["wrist"] == {"rmse_cm": round(np.sqrt(3), 4),
+                                            "within_5cm_pct": 100.0, "n": 50}
+    assert acc["arm-smoother"]["elbow"] == {"rmse_cm": None, "within_5cm_pct": None, "n": 0}
+    json.dumps(acc, allow_nan=False)  # valid JSON: no NaN
+
+
+def test_dozens_of_movements_are_tabled_over_pages_inside_the_page():
+    """A 10-minute session's movements were drawn as one page's tables, most below its foot."""
+    from armtrack_cli.report import layout, tables
+
+    segs = [{"measure": m, "segment": str(n), "value": "1.0", "sd": 0.1, "unit": "",
+             "t_start": n, "t_end": n + 1}
+            for n in range(1, 61) for m in ("wrist_peak_speed", "movement_time", "sparc")]
+    r = report(kinematics=pd.concat([kin([("wrist_peak_speed", 0.2, 0.01)]), pd.DataFrame(segs)]))
+    pages = tables.pages(r)[1:]
+    assert len(pages) >= 2
+    plt = layout.setup()
+    for _title, draw in pages:
+        fig = layout.page(plt, _title)
+        draw(fig)
+        for ax in fig.axes:
+            assert ax.get_position().y0 >= 0.0, ax.get_position()
+        plt.close(fig)
