@@ -169,6 +169,8 @@ def test_a_counts_sd_is_not_rounded_to_zero():
     """movement units 4 with an SD of 0.36 units printed "4 ± 0" (the count's 0 decimals)."""
     assert words.sd_number(0.36162, "movement_units") == "0.4"
     assert words.sd_number(0.008354, "wrist_peak_speed") == "0.008"  # others: their decimals
+    assert words.sd_number(0.00031, "wrist_mean_speed") == "0.0003"  # long-10: "± 0.000"
+    assert words.sd_number(0.0, "wrist_mean_speed") == "0.000"
     r = report(kinematics=kin([("movement_units", 4.0, 0.36162)]))
     assert summary.value_text(r, "movement_units") == "4 ± 0.4"
 

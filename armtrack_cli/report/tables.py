@@ -58,7 +58,8 @@ def movement_blocks(r: SessionReport, notes: Notes) -> list[tuple[list[str], lis
                 row.append(shown + (f" ± {_sd(sd, m)}" if math.isfinite(sd) and
                                     not shown.startswith("not") else ""))
             rows.append(row)
-        out.append((["measure"] + [f"movement {sgm}" for sgm in block], rows))
+        # the number alone: "movement 100" did not fit a column of six
+        out.append((["measure / movement no."] + [str(sgm) for sgm in block], rows))
     return out
 
 

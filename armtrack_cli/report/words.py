@@ -74,8 +74,9 @@ def number(value, measure: str) -> str:
 
 
 def sd_number(sd, measure: str) -> str:
-    """An SD as printed: the measure's decimals, one at least (a count's SD of 0.36 units is
-    no "± 0", which would say the count is certain)."""
+    """An SD as printed: the measure's decimals, one at least, and one significant digit at
+    least (a count's SD of 0.36 units is no "± 0", a speed's of 0.0003 m/s no "± 0.000":
+    either would say the value is certain)."""
     try:
         v = float(sd)
     except (TypeError, ValueError):
@@ -83,6 +84,8 @@ def sd_number(sd, measure: str) -> str:
     if not math.isfinite(v):
         return "not computable"
     d = max(MEASURES.get(measure, ("", "", 3))[2], 1)
+    while 0 < abs(v) < 0.5 * 10.0 ** -d and d < 6:  # one significant digit at least
+        d += 1
     return f"{v:.{d}f}".replace("-", "−")
 
 
