@@ -52,7 +52,9 @@ def palm_kinematics(traj: pd.DataFrame, session: Session) -> pd.DataFrame:
     t = traj["t"].to_numpy()
     ok = np.isfinite(t) & traj["wrist_x"].notna().to_numpy()
     span = (float(t[ok][0]), float(t[ok][-1])) if ok.any() else (np.nan, np.nan)
-    rows = [{"measure": m, "segment": "session", "value": f"{v:.6f}", "sd": np.nan, "unit": u,
+    rows = [{"measure": m, "segment": "session", "unit": u, "sd": np.nan,
+             "value": f"{v:.6f}" if np.isfinite(v) else  # "nan" broke the contract and the report
+             "not computable: no run of 3 or more frames with this angle",
              "t_start": span[0], "t_end": span[1]}
             for m, v, u in angular_speeds(t, traj[[f"{a}_deg" for a in ANGLES]].to_numpy())]
     return pd.concat([kin, pd.DataFrame(rows, columns=kin.columns)], ignore_index=True)
