@@ -230,8 +230,9 @@ def test_several_sessions_of_one_subject_give_a_progress_report(arm, tmp_path):
     pages = pdf_pages(tmp_path / "p.pdf")
     assert "Progress over sessions" in pages[0] and "2026-11-20 to 2026-11-27" in pages[0]
     assert pages[0].index("2026-11-20 (circle-01") < pages[0].index("2026-11-27 (circle-02")
-    assert "beyond uncertainty" in pages[0] and len(pages) == 4
-    assert "Movement report" in pages[2] and "circle-02" in pages[3]
+    # table, two pages of charts (every measure of the table: 10, eight a page), two first pages
+    assert "beyond uncertainty" in pages[0] and len(pages) == 5
+    assert "Movement report" in pages[3] and "circle-02" in pages[4]
     kin = pd.read_csv(out / "kinematics-arm-smoother.csv", dtype={"value": str}).set_index(
         "measure")
     assert shown(float(kin.loc["elbow_flexion_rom", "value"]), 1) in pages[0]

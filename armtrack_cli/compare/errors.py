@@ -89,3 +89,21 @@ def pooled(rows: list[dict]) -> list[dict]:
                     "max_abs_cm": max(r["max_abs_cm"] for r in rs),
                     "within_5cm_pct": sum(r["n"] * r["within_5cm_pct"] for r in rs) / n, "n": n})
     return out
+
+
+def accuracy_3d(rows) -> dict[str, dict[str, dict]]:
+    """{method: {joint: {rmse_cm, within_5cm_pct, n}}} of the 3-D rows of errors.csv, for
+    `compare --json`: a script reads the accuracy without parsing the CSV; a statistic over no
+    frame (n = 0) is null, never NaN (which is no JSON)."""
+    out: dict[str, dict[str, dict]] = {}
+    for r in rows:
+        if r["axis"] == "3d":
+            out.setdefault(r["method"], {})[r["joint"]] = {
+                "rmse_cm": _json_number(r["rmse_cm"]),
+                "within_5cm_pct": _json_number(r["within_5cm_pct"]), "n": int(r["n"])}
+    return out
+
+
+def _json_number(x) -> float | None:
+    x = float(x)
+    return round(x, 4) if np.isfinite(x) else None

@@ -91,17 +91,21 @@ def _rom(x: np.ndarray) -> tuple[float, float]:
     return float(np.ptp(x)), float(np.subtract(*np.percentile(x, [95, 5])))
 
 
-def _angle_rows(method: str, t: np.ndarray, est: np.ndarray, truth: np.ndarray) -> list[dict]:
-    """Per angle: the error's statistics, and the RoM of estimate and truth over the frames
-    where both exist (truth from the six markers, core/wrist.py), both low-passed at 6 Hz as
-    the kinematic measures are (marker noise would otherwise widen the truth's max − min)."""
+def _angle_rows(method: str, t: np.ndarray, est: np.ndarray, truth: np.ndarray,
+                measured: np.ndarray) -> list[dict]:
+    """Per angle: the error's statistics over the frames where both exist, and the RoM of
+    estimate and truth over those of them that were measured (not the filter's prediction
+    while the markers were lost: kinematics-ukf-palm.csv's frames) (truth from the six
+    markers, core/wrist.py), both low-passed at 6 Hz as the kinematic measures are (marker
+    noise would otherwise widen the truth's max − min)."""
     rows = []
     for k, name in enumerate(ANGLES):
         ok = np.isfinite(est[:, k]) & np.isfinite(truth[:, k])
         e = est[ok, k] - truth[ok, k]
         n = int(e.size)
-        (re, pe) = _rom(lowpass(t, np.where(ok, est[:, k], np.nan))[ok])
-        (rt, pt) = _rom(lowpass(t, np.where(ok, truth[:, k], np.nan))[ok])
+        m = ok & measured
+        (re, pe) = _rom(lowpass(t, np.where(m, est[:, k], np.nan))[m])
+        (rt, pt) = _rom(lowpass(t, np.where(m, truth[:, k], np.nan))[m])
         rows.append({"method": method, "angle": name,
                      "mean_deg": float(e.mean()) if n else np.nan,
                      "std_deg": float(e.std(ddof=1)) if n > 1 else np.nan,
@@ -113,18 +117,23 @@ def _angle_rows(method: str, t: np.ndarray, est: np.ndarray, truth: np.ndarray) 
     return rows
 
 
-def score(method: str, traj: pd.DataFrame, truth: TruthPose) -> PalmScore:
+def score(method: str, traj: pd.DataFrame, truth: TruthPose,
+          measured: np.ndarray | None = None) -> PalmScore:
+    """Errors over every frame with both; RoM and angular speeds over the ``measured`` ones
+    (default: all)."""
     import pandas as pd  # palm sessions only: arm compare never loads it
 
     t = traj["t"].to_numpy()
+    measured = np.ones(t.size, bool) if measured is None else measured
     est_w = traj[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
     est_a = traj[[f"{a}_deg" for a in ANGLES]].to_numpy()
     pos = error_rows(method, "wrist", est_w, truth.wrist)
-    ang = _angle_rows(method, t, est_a, truth.angles_deg)
+    ang = _angle_rows(method, t, est_a, truth.angles_deg, measured)
     ok = np.isfinite(est_w).all(1) & np.isfinite(truth.wrist).all(1) & np.isfinite(
         truth.angles_deg).all(1)
     excluded = int((np.isfinite(est_w).all(1) & ~ok).sum())
-    mask = lambda a: np.where(ok[:, None], a, np.nan)  # noqa: E731  (the same frames for both)
+    ok_m = ok & measured
+    mask = lambda a: np.where(ok_m[:, None], a, np.nan)  # noqa: E731  (the same frames for both)
     speeds = [{"method": method, "measure": e[0], "segment": "session", "unit": e[2],
                "estimate": e[1], "estimate_sd": np.nan, "truth": tr[1], "error": e[1] - tr[1],
                "error_pct": 100 * (e[1] - tr[1]) / abs(tr[1]) if tr[1] else np.nan}

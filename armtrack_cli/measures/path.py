@@ -71,3 +71,24 @@ def straightness(p: np.ndarray, v: np.ndarray, s: Settings, *,
     if d < s.min_reach_m:
         raise NotComputable(f"start and end are {100 * d:.1f} cm apart (a return, not a reach)")
     return path_length(p, v, s, span=span) / d
+
+
+EDGE_MEASURES = ("wrist_mean_speed", "time_to_peak_speed", "movement_time", "wrist_path_length",
+                 "movement_units", "sparc", "ldlj", "straightness")  # need onset and offset
+
+
+def cut_edges(t: np.ndarray, v: np.ndarray, s: Settings) -> tuple[str | None, str | None]:
+    """Why the movement at the start / the end of the data is cut, or None: the hand moving
+    at 20 % of the peak speed or more (s.min_segment_peak), and at least at the speed that
+    is movement at all (s.min_moving_speed), at the first / last sample, as where the
+    wrist's data begin or end mid-movement (lost tracking before or after). Noise at rest is
+    far below both (the 2 % onset threshold is not: a tracker's noise can cross it,
+    docs/measures.md), so a recording that starts and ends at rest is never cut."""
+    if v.size < 3 or not np.isfinite(v).all() or v.max() < s.min_moving_speed:
+        return None, None
+    high = max(s.min_segment_peak * v.max(), s.min_moving_speed)
+    start = (f"the hand is moving ({v[0]:.3f} m/s) where the wrist's data begin at "
+             f"{t[0]:.2f} s: the movement's start is not in the data") if v[0] >= high else None
+    end = (f"the hand is moving ({v[-1]:.3f} m/s) where the wrist's data end at "
+           f"{t[-1]:.2f} s: the movement's end is not in the data") if v[-1] >= high else None
+    return start, end

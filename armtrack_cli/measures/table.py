@@ -120,6 +120,39 @@ def path_values(inp: Inputs, s: Settings, windows: list | None = None
     return out, windows
 
 
+def cut_values(inp: Inputs, vals: dict, windows: list, s: Settings) -> None:
+    """_cut on the measures of one trajectory (the estimate's, or the truth's on its windows):
+    not on the posterior draws, whose SD is only taken of values that stand (measure_rows),
+    and whose noise at the data's edges must not judge the estimate's movement."""
+    try:
+        t, _, v = speed_profile(inp.t, inp.wrist, s)
+    except NotComputable:
+        return
+    segs = [(int(np.searchsorted(t, a - 1e-9)), int(np.searchsorted(t, b + 1e-9)))
+            for a, b in windows]
+    _cut(vals, t, v, s, segs if len(segs) > 1 else [])
+
+
+def _cut(out: dict, t, v, s: Settings, segs: list) -> None:
+    """A movement cut by the start or the end of the data has no onset or offset: its
+    measures that need them (path.EDGE_MEASURES), in the session's row and in the first or
+    last segment's, become not computable, and so does a peak speed at the cut sample. A
+    value not computable already keeps its reason."""
+    start, end = path.cut_edges(t, v, s)
+    windows = [("session", 0, v.size)] + [(str(n), a, b) for n, (a, b) in enumerate(segs, 1)]
+    for why, edge in ((start, 0), (end, v.size)):
+        if why is None:
+            continue
+        for seg, a, b in windows:
+            if edge not in (a, b) or b - a < 1:
+                continue
+            k = a + int(np.argmax(v[a:b]))
+            for key in [x for x in out if x[1] == seg and not isinstance(out[x], str)]:
+                if key[0] in path.EDGE_MEASURES or (key[0] == "wrist_peak_speed" and
+                                                    k in (edge, edge - 1)):
+                    out[key] = f"not computable: {why}"
+
+
 def angle_series(inp: Inputs, s: Settings) -> dict[str, np.ndarray | str]:
     """Each angle over time (deg), or why it cannot be had from these inputs: the posterior
     draws' angles (angle_draws.angle_series_rows) of this one trajectory, with the IMU's
@@ -196,6 +229,7 @@ def measure_rows(inp: Inputs, s: Settings = DEFAULT, windows: list | None = None
     support one); t_start, t_end the segment's window in session time (s). Given windows
     (e.g. the estimate's, for the ground truth), the segments are those."""
     vals, windows = values(inp, s, windows)
+    cut_values(inp, vals, windows, s)
     fixed = ("segments",) + tuple(f"forearm_pronation_{k}" for k in ("rom", "rom_p5_p95", "min", "max"))
     sds = _uncertainty(inp, [k for k, v in vals.items() if not isinstance(v, str)
                              and k[0] not in fixed], windows, s)  # no posterior for these

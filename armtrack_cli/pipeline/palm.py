@@ -44,15 +44,31 @@ from armtrack_cli.session.video import probe_video
 METHOD = "ukf-palm"
 
 
+def measured_only(traj: pd.DataFrame) -> pd.DataFrame:
+    """The trajectory with its rows flagged ``predicted_only`` (no marker usable: the filter's
+    prediction, up to max_coast_s) emptied: the measures are taken over measured frames. A
+    prediction through 0.9 s of lost markers while the wrist flexed went on to 87.5° (truth:
+    45.1°), and the flexion range read 132.5° for a true 90.2°."""
+    if "predicted_only" not in traj or not (traj["predicted_only"] == 1).any():
+        return traj
+    out = traj.copy()
+    cols = [c for c in out.columns if c not in ("t", "markers_used", "predicted_only")]
+    out.loc[out["predicted_only"] == 1, cols] = np.nan
+    return out
+
+
 def palm_kinematics(traj: pd.DataFrame, session: Session) -> pd.DataFrame:
     """kinematics-ukf-palm.csv: the measures package's table (RoM of each angle as max − min
     and 5th-95th percentile, path length, peak and mean speed, …) and each angle's peak and
-    mean angular speed (core/wrist_measures.py) in the same shape."""
+    mean angular speed (core/wrist_measures.py) in the same shape, over measured frames."""
+    traj = measured_only(traj)
     kin = kinematics_table(traj, session)
     t = traj["t"].to_numpy()
     ok = np.isfinite(t) & traj["wrist_x"].notna().to_numpy()
     span = (float(t[ok][0]), float(t[ok][-1])) if ok.any() else (np.nan, np.nan)
-    rows = [{"measure": m, "segment": "session", "value": f"{v:.6f}", "sd": np.nan, "unit": u,
+    rows = [{"measure": m, "segment": "session", "unit": u, "sd": np.nan,
+             "value": f"{v:.6f}" if np.isfinite(v) else  # "nan" broke the contract and the report
+             "not computable: no run of 3 or more frames with this angle",
              "t_start": span[0], "t_end": span[1]}
             for m, v, u in angular_speeds(t, traj[[f"{a}_deg" for a in ANGLES]].to_numpy())]
     return pd.concat([kin, pd.DataFrame(rows, columns=kin.columns)], ignore_index=True)
@@ -186,14 +202,15 @@ def compare_palm(session: Session, dest: Path, methods: tuple[str, ...]) -> dict
     traj = read_trajectory(dest / f"trajectory-{METHOD}.csv")
     t = traj["t"].to_numpy()
     start_t = float(t[np.isfinite(traj["wrist_x"].to_numpy())][0])
-    est = trajectory_inputs(traj, session)
+    est = trajectory_inputs(measured_only(traj), session)  # the truth on the same frames
     if session.groundtruth.hand is not None:
         truth, wrist = _body_truth(session, t, start_t)
         tin = truth_pose_inputs(est, wrist, truth.angles_deg)
     else:
         truth, markers = _marker_truth(session, t, start_t)
         tin = truth_inputs(est, session, markers)
-    res = cmp.score(METHOD, traj, truth)
+    res = cmp.score(METHOD, traj, truth, measured=traj["predicted_only"].to_numpy() != 1
+                    if "predicted_only" in traj else None)
     mrows = measure_comparison(METHOD, kinematics_rows(dest / f"kinematics-{METHOD}.csv"), tin)
     speeds = {r["measure"] for r in res.speed_rows}
     mrows = [r for r in mrows if r["measure"] not in speeds] + res.speed_rows

@@ -4,6 +4,7 @@
     words.py       plain names, units and number formats (one rule for every page and test)
     quality.py     the data-quality verdict and its reasons
     layout.py      A4 pages with the subject, date and page number; greyscale-safe styles
+    fonts.py       fallback fonts for a name DejaVu Sans lacks (CJK, …); one warning if none
     summary.py     page 1: who and what, the key measures in words, data quality, verdict
     trajectory.py  wrist position with its uncertainty band, top and side views, elbow angle,
                    speed with the movement units
@@ -12,7 +13,7 @@
     palm.py        the three wrist angles over time with their ranges
     tables.py      every measure with its uncertainty, per segment
     progress.py    several sessions: each measure by date, the change and whether it exceeds
-                   the uncertainty
+                   the uncertainty (not judged across tracking methods), four sessions a table
 
 matplotlib is imported only when a report is drawn (Agg backend, real text in the PDF).
 """

@@ -39,6 +39,11 @@ class SessionReport:
     measures: pd.DataFrame | None = None  # measures.csv rows of this method
     notes: tuple[str, ...] = ()  # what could not be shown, in plain words
 
+    def text(self) -> str:
+        """Every text of the session's own (not the report's words) that a page may print."""
+        return " ".join((self.session_id, self.subject, self.date, self.task, self.side,
+                         self.method or "", *self.notes))
+
     @property
     def day(self) -> str:
         return self.date[:10] if self.date else "date not recorded"

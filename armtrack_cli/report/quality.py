@@ -4,7 +4,8 @@ Thresholds (ours, stated on page 1): a frame is tracked when the camera found th
 under 50 % tracked or a calibration reprojection error over 2 px is not usable; under 90 %
 tracked, IMU gaps longer than 0.1 s or over 1 % of samples lost, reprojection over 1 px, a
 synchronisation offset left to estimate, or (with ground truth) a wrist RMS error over 5 cm
-asks for care; over 10 cm is not usable."""
+asks for care; over 10 cm is not usable. Measures taken over less than 90 % of the recording
+(the tracking has no wrist for the rest) ask for care, saying over which part."""
 
 from __future__ import annotations
 
@@ -19,6 +20,34 @@ def _wrist_rmse_cm(r: SessionReport) -> float | None:
     e = r.errors[(r.errors["method"] == r.method) & (r.errors["joint"] == "wrist")
                  & (r.errors["axis"] == "3d")]
     return float(e["rmse_cm"].iloc[0]) if len(e) else None
+
+
+COVER_CARE = 0.9  # measures over less than this share of the recording ask for care
+
+
+def coverage(r: SessionReport) -> tuple[float, float, float] | None:
+    """(start, end, recording length) in s: the span the session's measures are taken over
+    (kinematics' t_start, t_end: from the first to the last frame with a wrist) and the
+    trajectory's whole span, one frame interval included; None without both."""
+    import numpy as np
+
+    k, d = r.kinematics, r.trajectory
+    if k is None or d is None or "t_start" not in k or len(d) < 2:
+        return None
+    row = k[k["segment"] == "session"]
+    t = d["t"].to_numpy(dtype=float)
+    if not len(row) or not np.isfinite(t).all():
+        return None
+    a, b = float(row["t_start"].iloc[0]), float(row["t_end"].iloc[0])
+    dt = float(np.median(np.diff(t)))
+    if not (np.isfinite(a) and np.isfinite(b)):
+        return None
+    return a, b + dt, float(t[-1] - t[0]) + dt
+
+
+def coverage_text(c: tuple[float, float, float]) -> str:
+    a, b, total = c
+    return f"{b - a:.1f} s of the {total:.1f} s recorded ({a:.1f} to {b:.1f} s)"
 
 
 def verdict(r: SessionReport) -> tuple[str, list[str]]:
@@ -51,6 +80,10 @@ def verdict(r: SessionReport) -> tuple[str, list[str]]:
         bad.append(f"wrist error against the reference {rmse:.1f} cm RMS (over 10 cm)")
     elif rmse is not None and rmse > 5:
         care.append(f"wrist error against the reference {rmse:.1f} cm RMS (over 5 cm)")
+    c = coverage(r)
+    if c is not None and c[1] - c[0] < COVER_CARE * c[2]:
+        care.append(f"the measures cover only {coverage_text(c)}: the tracking has no wrist "
+                    "position for the rest")
     if r.trajectory is not None:
         care += list(r.notes)
     if bad:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import io
 
-from armtrack_cli.report import layout
+from armtrack_cli.report import layout, words
 from armtrack_cli.report.data import SessionReport
 
 
@@ -28,24 +28,29 @@ def render(reports: list[SessionReport]) -> bytes:
     """The PDF of one session, or of several of one subject (progress first, then the first
     page of each)."""
     plt = layout.setup()
+    import matplotlib
     from matplotlib.backends.backend_pdf import PdfPages
 
-    from armtrack_cli.report import progress, summary
+    from armtrack_cli.report import fonts, progress, summary
+
+    family, unknown = fonts.families(r.text() for r in reports)
+    matplotlib.rcParams["font.family"] = family  # fallbacks for a name DejaVu Sans lacks
 
     reports = sorted(reports, key=lambda r: (r.date or "", r.session_id))
     planned = []  # (header text, title, draw)
     if len(reports) > 1:
         span = f"{reports[0].day} to {reports[-1].day}"
-        left = f"Subject {reports[0].subject} · {len(reports)} sessions, {span}"
+        left = f"Subject {words.clip(reports[0].subject, 40)} · {len(reports)} sessions, {span}"
         planned += [(left, t, d) for t, d in progress.pages(reports)]
     for r in reports:  # several sessions: each one's first page (its own report has the rest)
-        left = f"Subject {r.subject} · session of {r.day} ({r.session_id})"
+        left = (f"Subject {words.clip(r.subject, 40)} · session of {r.day} "
+                f"({words.clip(r.session_id, 24)})")
         pages = session_pages(r) if len(reports) == 1 else [summary.page_one(r)]
         planned += [(left, t, d) for t, d in pages]
     buf = io.BytesIO()
     meta = {"Title": f"Movement report, subject {reports[0].subject}", "Creator": "armtrack",
             "CreationDate": None, "ModDate": None}  # no clock: same inputs, same bytes
-    with PdfPages(buf, metadata=meta) as pdf:
+    with fonts.one_glyph_warning(unknown), PdfPages(buf, metadata=meta) as pdf:
         for n, (left, title, draw) in enumerate(planned, 1):
             fig = layout.page(plt, title)
             layout.header(fig, left, n, len(planned))

@@ -6,7 +6,7 @@ import math
 
 from armtrack_cli.report import layout, words
 from armtrack_cli.report.data import SessionReport
-from armtrack_cli.report.quality import verdict
+from armtrack_cli.report.quality import coverage, coverage_text, verdict
 
 ARM_ANGLES = ("elbow_flexion", "shoulder_elevation", "shoulder_plane", "forearm_pronation")
 PALM_ANGLES = ("wrist_flexion", "wrist_deviation", "wrist_pronation")
@@ -68,7 +68,7 @@ def value_text(r: SessionReport, measure: str, segment: str = "session") -> str 
                 f"{words.with_unit(lo, measure)} to {words.with_unit(hi, measure)})")
     out = words.with_unit(v, measure)
     if math.isfinite(sd):
-        out += f" ± {words.with_unit(sd, measure)}"
+        out += f" ± {words.sd_with_unit(sd, measure)}"
     return out
 
 
@@ -100,6 +100,9 @@ def key_lines(r: SessionReport) -> list[str]:
 def quality_lines(r: SessionReport) -> list[str]:
     q = r.quality
     out = []
+    c = coverage(r)
+    if c is not None:
+        out.append(f"measures taken over {coverage_text(c)}")
     if math.isfinite(q.tracked_pct):
         out.append(f"frames in which the camera found the {'hand markers' if r.kind == 'palm' else 'wrist'}: "
                    f"{q.tracked_pct:.1f} % of {q.frames}")
@@ -118,17 +121,38 @@ def quality_lines(r: SessionReport) -> list[str]:
     if r.errors is not None and r.method is not None:
         e = r.errors[(r.errors["method"] == r.method) & (r.errors["joint"] == "wrist")
                      & (r.errors["axis"] == "3d")]
-        if len(e):
+        n = int(e["n"].iloc[0]) if len(e) and "n" in e else None
+        if len(e) and n != 0:
             out.append(f"wrist error against the reference motion capture: "
                        f"{e['rmse_cm'].iloc[0]:.2f} cm RMS, {e['within_5cm_pct'].iloc[0]:.1f} % "
-                       "of frames within 5 cm")
+                       f"of {'' if n is None else f'{n} '}frames within 5 cm")
+        elif len(e):
+            out.append("wrist error against the reference motion capture: no frame where both "
+                       "the estimate and the reference have the wrist")
+    elif r.method is not None and r.errors is None and r.truth_wrist is None:
+        out.append("no reference motion capture compared with this session: its accuracy "
+                   "is not measured here")
     return out
+
+
+WIDTH = 90  # characters of 10 pt text across the page
+
+
+def who_lines(r: SessionReport) -> list[str]:
+    """Subject, session and date on one line; a long name or id on lines of their own, broken
+    to the page's width (never cut: page 1 is where the full name is)."""
+    when = f"Date: {r.date or 'not recorded'}"
+    one = f"Subject: {r.subject}        Session: {r.session_id}        {when}"
+    if len(one) <= WIDTH:
+        return [one]
+    return [*words.lines_of(f"Subject: {r.subject}", WIDTH),
+            *words.lines_of(f"Session: {r.session_id}", WIDTH), when]
 
 
 def page_one(r: SessionReport):
     def draw(fig):
         y = layout.text_block(fig, 0.07, 0.90, [
-            f"Subject: {r.subject}        Session: {r.session_id}        Date: {r.date or 'not recorded'}",
+            *who_lines(r),
             f"Task: {words.task_name(r.task)}        Side: {r.side} {'hand' if r.kind == 'palm' else 'arm'}",
             f"Tracking method: {words.method_name(r.method, source=True)}",
             *([f"    (named {r.method} in the tables)"] if r.method else []),
@@ -140,7 +164,9 @@ def page_one(r: SessionReport):
         y = layout.text_block(fig, 0.09, y - 0.045, quality_lines(r), size=9.5, step=0.02)
         v, reasons = verdict(r)
         fig.text(0.07, y - 0.02, f"Verdict: {v}", fontsize=13, weight="bold", va="top")
-        y = layout.text_block(fig, 0.09, y - 0.055, [f"• {x}" for x in reasons], size=9.5, step=0.02)
+        lines = [("• " if i == 0 else "   ") + x for why in reasons
+                 for i, x in enumerate(words.lines_of(why, WIDTH))]
+        y = layout.text_block(fig, 0.09, y - 0.055, lines, size=9.5, step=0.02)
         layout.text_block(fig, 0.07, 0.10, [
             "How to read this: ranges of motion are the largest minus the smallest angle seen; the",
             "5th-95th percentile range ignores brief extremes. Movement time starts and ends where the",

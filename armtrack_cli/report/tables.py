@@ -30,7 +30,7 @@ class Notes:
 
 
 def _sd(x: float, measure: str) -> str:
-    return words.number(x, measure) if math.isfinite(x) else "—"
+    return words.sd_number(x, measure) if math.isfinite(x) else "—"
 
 
 def session_rows(r: SessionReport, notes: Notes) -> list[list[str]]:
@@ -58,7 +58,8 @@ def movement_blocks(r: SessionReport, notes: Notes) -> list[tuple[list[str], lis
                 row.append(shown + (f" ± {_sd(sd, m)}" if math.isfinite(sd) and
                                     not shown.startswith("not") else ""))
             rows.append(row)
-        out.append((["measure"] + [f"movement {sgm}" for sgm in block], rows))
+        # the number alone: "movement 100" did not fit a column of six
+        out.append((["measure / movement no."] + [str(sgm) for sgm in block], rows))
     return out
 
 
@@ -75,19 +76,42 @@ def pages(r: SessionReport) -> list:
                      widths=[0.52, 0.22, 0.13, 0.13], size=7.5)
         layout.text_block(fig, 0.07, 0.885 - h - 0.015, notes.lines(), size=7.5, step=0.014)
 
-    def draw_movements(fig):
-        fig.text(0.07, 0.905, "Each movement found (lap, reach or return), in time order; "
-                 "value ± the tracking's uncertainty.", fontsize=8.5)
-        y = 0.885
-        for head, rows in blocks:
-            h = 0.0165 * (len(rows) + 1)
-            w0 = 0.31
-            layout.table(fig, [0.07, y - h, 0.86, h], rows, head,
-                         widths=[w0] + [(1 - w0) / (len(head) - 1)] * (len(head) - 1), size=6.8)
-            y -= h + 0.03
-        layout.text_block(fig, 0.07, y, m_notes.lines(), size=7.5, step=0.014)
-
     out = [("Measures of the whole session", draw_session)]
-    if blocks:
-        out.append(("Measures of each movement", draw_movements))
-    return out
+    return out + movement_pages(blocks, m_notes)
+
+
+def movement_pages(blocks, notes: Notes) -> list:
+    """The movements' blocks, as many a page as fit (a 10-minute session has dozens of
+    movements: one page drew them far below its foot); the notes after the last."""
+    plan: list[list] = [[]]
+    y = 0.885
+    for head, rows in blocks:
+        h = 0.0165 * (len(rows) + 1)
+        if y - h < 0.05 and plan[-1]:
+            plan.append([])
+            y = 0.885
+        plan[-1].append((y, h, head, rows))
+        y -= h + 0.03
+    foot = 0.014 * len(notes.lines())
+    if blocks and y - foot < 0.04:
+        plan.append([])  # the notes on a page of their own
+
+    def drawer(mine, last):
+        def draw(fig):
+            fig.text(0.07, 0.905, "Each movement found (lap, reach or return), in time order; "
+                     "value ± the tracking's uncertainty.", fontsize=8.5)
+            y = 0.885
+            for y, h, head, rows in mine:
+                w0 = 0.31
+                layout.table(fig, [0.07, y - h, 0.86, h], rows, head,
+                             widths=[w0] + [(1 - w0) / (len(head) - 1)] * (len(head) - 1),
+                             size=6.8)
+                y -= h + 0.03
+            if last:
+                layout.text_block(fig, 0.07, y, notes.lines(), size=7.5, step=0.014)
+        return draw
+
+    if not blocks:
+        return []
+    return [("Measures of each movement", drawer(mine, k == len(plan) - 1))
+            for k, mine in enumerate(plan)]

@@ -35,16 +35,22 @@ def error_page(r: SessionReport):
     return "Wrist error against the reference", draw
 
 
+def _cm(x, decimals: int = 2) -> str:
+    """A Table I cell: "—" where errors.csv has none (no frame with both the estimate and the
+    reference: n = 0), never "nan"."""
+    x = float(x)
+    return f"{x:.{decimals}f}".replace("-", "−") if np.isfinite(x) else "—"
+
+
 def table_one_rows(errors, joint: str) -> list[list[str]]:
     out = []
     for m in dict.fromkeys(errors["method"]):
         by = errors[(errors["method"] == m) & (errors["joint"] == joint)].set_index("axis")
         if not len(by):
             continue
-        cells = [f"{by.loc[a, 'mean_cm']:.2f}/{by.loc[a, 'std_cm']:.2f}".replace("-", "−")
-                 for a in XYZ]
+        cells = [f"{_cm(by.loc[a, 'mean_cm'])}/{_cm(by.loc[a, 'std_cm'])}" for a in XYZ]
         out.append([f"{words.method_name(m)} ({m})"] + cells +
-                   [f"{by.loc['3d', 'rmse_cm']:.2f}", f"{by.loc['3d', 'within_5cm_pct']:.1f}"])
+                   [_cm(by.loc["3d", "rmse_cm"]), _cm(by.loc["3d", "within_5cm_pct"], 1)])
     return out
 
 

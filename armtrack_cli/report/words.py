@@ -52,6 +52,9 @@ PARTS = {"rom": "range", "rom_p5_p95": "range 5th-95th pct", "min": "least", "ma
 for _a, _w in SHORT.items():
     for _k, _p in PARTS.items():
         MEASURES[f"{_a}_{_k}"] = (f"{_w}: {_p}", "°", 1)
+for _a in ("wrist_flexion", "wrist_deviation", "wrist_pronation"):  # core/wrist_measures.py
+    MEASURES[f"{_a}_peak_speed"] = (f"{SHORT[_a]}: peak angular speed", "°/s", 1)
+    MEASURES[f"{_a}_mean_speed"] = (f"{SHORT[_a]}: mean angular speed", "°/s", 1)
 
 
 def name(measure: str) -> str:
@@ -70,12 +73,49 @@ def number(value, measure: str) -> str:
     return f"{v:.{d}f}".replace("-", "−")
 
 
+def sd_number(sd, measure: str) -> str:
+    """An SD as printed: the measure's decimals, one at least, and one significant digit at
+    least (a count's SD of 0.36 units is no "± 0", a speed's of 0.0003 m/s no "± 0.000":
+    either would say the value is certain)."""
+    try:
+        v = float(sd)
+    except (TypeError, ValueError):
+        return "not computable"
+    if not math.isfinite(v):
+        return "not computable"
+    d = max(MEASURES.get(measure, ("", "", 3))[2], 1)
+    while 0 < abs(v) < 0.5 * 10.0 ** -d and d < 6:  # one significant digit at least
+        d += 1
+    return f"{v:.{d}f}".replace("-", "−")
+
+
+def sd_with_unit(sd, measure: str) -> str:
+    s = sd_number(sd, measure)
+    unit = MEASURES.get(measure, ("", "", 3))[1]
+    if s == "not computable" or not unit:
+        return s
+    return s + unit if unit == "°" else f"{s} {unit}"
+
+
 def with_unit(value, measure: str) -> str:
     s = number(value, measure)
     unit = MEASURES.get(measure, ("", "", 3))[1]
     if s == "not computable" or not unit:
         return s
     return s + unit if unit == "°" else f"{s} {unit}"
+
+
+def clip(text: str, n: int) -> str:
+    """text cut to n characters with "…" (a name in a header that must leave room for the
+    page number); unchanged when it fits."""
+    return text if len(text) <= n else text[:n - 1].rstrip() + "…"
+
+
+def lines_of(text: str, n: int) -> list[str]:
+    """text broken into lines of at most n characters, at spaces where it has them."""
+    import textwrap
+
+    return textwrap.wrap(text, n, break_long_words=True, break_on_hyphens=False) or [""]
 
 
 def method_name(method: str | None, *, source: bool = False) -> str:
