@@ -80,6 +80,7 @@ validate: $(STAMP)
 	$(BIN)/python validation/from_mocap.py
 	$(BIN)/python validation/imu_sync.py
 	$(BIN)/python validation/arm_auto.py
+	$(BIN)/python validation/arm_auto_tape.py
 	$(BIN)/python validation/forward_filter.py
 
 docs: $(STAMP)

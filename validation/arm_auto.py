@@ -39,6 +39,30 @@ GOALS = {"shoulder_cm": 2.0, "length_cm": 1.0, "wrist_ratio": 1.2}
 ARM_KEYS = ("upper_arm_m", "forearm_m", "shoulder_m")
 
 
+# sections other scripts write into the same file (validation/arm_auto_tape.py's), kept as they are
+KEPT_SECTIONS = ("## The arm as a lab would declare it",)
+
+
+def task_runs(tasks, seeds: int) -> list[tuple[str, ArmSimSettings]]:
+    """The sessions of the main table: each task × seeds 0 … seeds-1, simulator defaults."""
+    return [(f"{t}-s{k}", ArmSimSettings(task=t, seed=k)) for t in tasks for k in range(seeds)]
+
+
+def kept_sections(text: str, out: Path) -> str:
+    """``text`` with the sections of KEPT_SECTIONS that ``out`` holds now appended, so that
+    regenerating this script's part leaves another script's part in place."""
+    old = out.read_text() if out.is_file() else ""
+    parts = [section(old, h) for h in KEPT_SECTIONS if h in old]
+    return "\n".join([text.rstrip("\n") + "\n", *parts]) if parts else text
+
+
+def section(text: str, heading: str) -> str:
+    """The section of ``text`` that starts at ``heading``, up to the next "## " heading."""
+    part = text[text.index(heading):]
+    end = part.find("\n## ", 1)
+    return part[:end + 1] if end > 0 else part
+
+
 def _wrist(folder: Path, out: Path, method: str) -> float:
     pipeline.fuse(folder, method=method, out=out)
     rows = pipeline.compare(folder, methods=(method,), out=out)["rows"]
@@ -221,7 +245,7 @@ def write(out: Path, rows: list[tuple[str, dict]], wall: float, seeds: int,
            if concave else "the log-likelihood shows no curvature in at least one direction "
            "at 2-SD steps on every session."),
         "", taped_line(ok), "", reading(ok), "", *movement_section(rows, moved or {})]
-    out.write_text("\n".join(lines))
+    out.write_text(kept_sections("\n".join(lines), out))
 
 
 def movement_section(rows: list[tuple[str, dict]], moved: dict) -> list[str]:
@@ -344,8 +368,7 @@ def main() -> None:
     t0 = time.perf_counter()
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        runs = [(f"{t}-s{k}", ArmSimSettings(task=t, seed=k)) for t in args.tasks.split(",")
-                for k in range(args.seeds)]
+        runs = task_runs(args.tasks.split(","), args.seeds)
         runs.append(("control", ArmSimSettings(task="circle", seed=0,
                                                imu_errors={"orientation_rms_deg": 0.0})))
         for name, s in runs:

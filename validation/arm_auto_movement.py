@@ -168,8 +168,8 @@ def reading(plain: list[dict], moved: list[dict]) -> str:
         f"{med([a for a, _ in sd]):.1f} and {med([b for _, b in sd]):.1f} cm. The wrist RMSE "
         f"is within 20 % of the declared arm's on {sum(v <= 1.2 for v in ratio0)} of {len(ok)} "
         f"sessions without the movement and on {sum(v <= 1.2 for v in ratio)} with it (median "
-        f"ratio {med(ratio0):.2f} and {med(ratio):.2f}); with the lengths tape-measured and the "
-        f"movement the shoulder comes to a median {med(tsh):.2f} cm (max {max(tsh):.2f}) and "
+        f"ratio {med(ratio0):.2f} and {med(ratio):.2f}); with the lengths exact (a perfect "
+        f"tape) and the movement the shoulder comes to a median {med(tsh):.2f} cm (max {max(tsh):.2f}) and "
         f"the wrist within 20 % on {sum(v <= 1.2 for v in tratio)} (median ratio "
         f"{med(tratio):.2f}; without the movement {sum(v <= 1.2 for v in tratio0)}, median "
         f"{med(tratio0):.2f}). So the movement brings the shoulder and the lengths within their "
@@ -186,4 +186,5 @@ def reading(plain: list[dict], moved: list[dict]) -> str:
         f"to about a centimetre (its errors, {min(b for _, b in sh):.2f}-"
         f"{max(b for _, b in sh):.2f} cm, are within that SD). A wider sweep of the "
         "elbow than a patient can be asked for, or a second view of the wrist's depth, is what "
-        "the wrist goal would need; the lengths tape-measured are the largest gain a lab has.")
+        "the wrist goal would need. Exact lengths would be the largest gain, but a tape's are "
+        "not exact: the next section declares the arm as a lab would measure it.")
