@@ -217,13 +217,20 @@ def _dipping(swap: tuple[int, int] | None, seed: int = 3, accel_error: float = 0
     p, _, F, b = _session(accel_error, seed)
     k = np.arange(N)
     gap = 0.2 - 0.12 * (np.exp(-((k - 100) / 8.0) ** 2) + np.exp(-((k - 160) / 8.0) ** 2))
+    return p, _roots_along_rays(p, gap, swap), F, b
+
+
+def _roots_along_rays(p: np.ndarray, gap: np.ndarray, swap: tuple[int, int] | None
+                      ) -> np.ndarray:
+    """(N, 2, 3): the truth p and a second root ``gap`` m beyond it along its ray from the
+    origin; ``swap`` (a, b): the two swapped outside frames a … b − 1."""
     other = p + gap[:, None] * p / np.linalg.norm(p, axis=1, keepdims=True)
     roots = np.stack([p, other], axis=1)
     if swap is not None:
         out = np.ones(N, bool)
         out[swap[0]:swap[1]] = False
         roots[out] = roots[out][:, ::-1]
-    return p, roots, F, b
+    return roots
 
 
 def test_the_nearest_frames_are_the_gaps_dips_not_its_noise():
@@ -238,27 +245,6 @@ def test_the_nearest_frames_are_the_gaps_dips_not_its_noise():
         (0, 100, 1), (100, 160, 1), (160, N, 1)]
 
 
-@pytest.mark.parametrize("accel_error", [0.0, 0.03])
-def test_a_wrong_stretch_cut_only_where_the_roots_come_nearest_is_moved_back(accel_error):
-    """The whole trajectory on root 1, the truth on root 0 over frames 100 … 159, the roots
-    never nearer than 8 cm: one run, which the grazing rule cannot cut (before lift13 nothing
-    moved); cut at the gap's dips, the wrong piece moves back to the truth."""
-    p, roots, F, b = _dipping((100, 160), accel_error=accel_error)
-    X = np.c_[roots[:, 1], np.zeros((N, 3))]
-    assert branch_repair.branch_runs(X[:, :3], roots) == [(0, N, 1)]
-    got, moved = branch_repair.repair(X, roots, _steps(F, b))
-    assert moved == 1
-    assert np.abs(got[:, :3] - p).max() < 1e-12
-
-
-@pytest.mark.parametrize("accel_error", [0.0, 0.03])
-def test_a_right_stretch_cut_where_the_roots_come_nearest_stays(accel_error):
-    p, roots, F, b = _dipping(None, accel_error=accel_error)
-    X = np.c_[p, np.zeros((N, 3))]
-    got, moved = branch_repair.repair(X, roots, _steps(F, b))
-    assert moved == 0 and np.array_equal(got, X)
-
-
 def _from_rest(swap: tuple[int, int] | None, accel_error: float = 0.0):
     """As _dipping, but the gap nearly flat up to frame 100 (9 cm falling to 8), then rising
     to 20 cm: a hand lifted from rest, where the ray passes nearest a tangent with nothing
@@ -269,13 +255,7 @@ def _from_rest(swap: tuple[int, int] | None, accel_error: float = 0.0):
     rising = 0.12 * (1 - np.exp(-(np.maximum(k - 100, 0) / 8.0) ** 2))
     gap = (0.08 + 0.01 * np.maximum(100 - k, 0) / 100 + rising
            - 0.12 * np.exp(-((k - 160) / 8.0) ** 2) * (k > 130))
-    other = p + gap[:, None] * p / np.linalg.norm(p, axis=1, keepdims=True)
-    roots = np.stack([p, other], axis=1)
-    if swap is not None:
-        out = np.ones(N, bool)
-        out[swap[0]:swap[1]] = False
-        roots[out] = roots[out][:, ::-1]
-    return p, roots, F, b
+    return p, _roots_along_rays(p, gap, swap), F, b
 
 
 def test_a_gap_flat_on_one_side_of_its_least_is_cut_there():
@@ -284,13 +264,19 @@ def test_a_gap_flat_on_one_side_of_its_least_is_cut_there():
     assert cuts.tolist() == [100, 160]  # not only the two-sided dip at 160
 
 
+# The wrong stretch: frames 100 … 159 on root 1, the truth on root 0, the whole trajectory on
+# root 1, one run the grazing rule cannot cut. _dipping: the roots never nearer than 8 cm
+# (before lift13 nothing moved; cut at the gap's dips). _from_rest: the stretch starts where
+# the gap leaves its flat (before lift14 only the dip at 160 cut the run, its pieces (0, 160)
+# and (160, N) untested, their windows reaching past the session's ends; cut where the flat
+# turns). Either way the wrong piece moves back to the truth, and a right one stays.
+BUILDERS = {"dipping": _dipping, "from_rest": _from_rest}
+
+
 @pytest.mark.parametrize("accel_error", [0.0, 0.03])
-def test_a_wrong_stretch_lifted_from_rest_is_moved_back(accel_error):
-    """The whole trajectory on root 1, the truth on root 0 over frames 100 … 159, which start
-    where the gap leaves its flat: before lift14 only the dip at 160 cut the run, its pieces
-    (0, 160) and (160, N) untested (their windows reach past the session's ends), nothing
-    moved; cut where the flat turns, the wrong piece moves back to the truth."""
-    p, roots, F, b = _from_rest((100, 160), accel_error=accel_error)
+@pytest.mark.parametrize("build", sorted(BUILDERS))
+def test_a_wrong_stretch_cut_where_the_roots_come_nearest_is_moved_back(build, accel_error):
+    p, roots, F, b = BUILDERS[build]((100, 160), accel_error=accel_error)
     X = np.c_[roots[:, 1], np.zeros((N, 3))]
     assert branch_repair.branch_runs(X[:, :3], roots) == [(0, N, 1)]
     got, moved = branch_repair.repair(X, roots, _steps(F, b))
@@ -299,8 +285,9 @@ def test_a_wrong_stretch_lifted_from_rest_is_moved_back(accel_error):
 
 
 @pytest.mark.parametrize("accel_error", [0.0, 0.03])
-def test_a_right_stretch_lifted_from_rest_stays(accel_error):
-    p, roots, F, b = _from_rest(None, accel_error=accel_error)
+@pytest.mark.parametrize("build", sorted(BUILDERS))
+def test_a_right_stretch_cut_where_the_roots_come_nearest_stays(build, accel_error):
+    p, roots, F, b = BUILDERS[build](None, accel_error=accel_error)
     X = np.c_[p, np.zeros((N, 3))]
     got, moved = branch_repair.repair(X, roots, _steps(F, b))
     assert moved == 0 and np.array_equal(got, X)

@@ -61,13 +61,19 @@ def name(measure: str) -> str:
     return MEASURES.get(measure, (measure.replace("_", " "), "", 3))[0]
 
 
-def number(value, measure: str) -> str:
-    """The value as the report prints it (no unit): the measure's decimals, "−" for minus."""
+def _finite(value) -> float | None:
+    """value as a float, or None where it is no finite number (a CSV's reason, NaN, inf)."""
     try:
         v = float(value)
     except (TypeError, ValueError):
-        return "not computable"
-    if not math.isfinite(v):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def number(value, measure: str) -> str:
+    """The value as the report prints it (no unit): the measure's decimals, "−" for minus."""
+    v = _finite(value)
+    if v is None:
         return "not computable"
     d = MEASURES.get(measure, ("", "", 3))[2]
     return f"{v:.{d}f}".replace("-", "−")
@@ -77,11 +83,8 @@ def sd_number(sd, measure: str) -> str:
     """An SD as printed: the measure's decimals, one at least, and one significant digit at
     least (a count's SD of 0.36 units is no "± 0", a speed's of 0.0003 m/s no "± 0.000":
     either would say the value is certain)."""
-    try:
-        v = float(sd)
-    except (TypeError, ValueError):
-        return "not computable"
-    if not math.isfinite(v):
+    v = _finite(sd)
+    if v is None:
         return "not computable"
     d = max(MEASURES.get(measure, ("", "", 3))[2], 1)
     while 0 < abs(v) < 0.5 * 10.0 ** -d and d < 6:  # one significant digit at least
@@ -90,15 +93,15 @@ def sd_number(sd, measure: str) -> str:
 
 
 def sd_with_unit(sd, measure: str) -> str:
-    s = sd_number(sd, measure)
-    unit = MEASURES.get(measure, ("", "", 3))[1]
-    if s == "not computable" or not unit:
-        return s
-    return s + unit if unit == "°" else f"{s} {unit}"
+    return _with_unit(sd_number(sd, measure), measure)
 
 
 def with_unit(value, measure: str) -> str:
-    s = number(value, measure)
+    return _with_unit(number(value, measure), measure)
+
+
+def _with_unit(s: str, measure: str) -> str:
+    """A printed number with the measure's unit ("°" joined, others after a space)."""
     unit = MEASURES.get(measure, ("", "", 3))[1]
     if s == "not computable" or not unit:
         return s
