@@ -187,11 +187,8 @@ def compare(sessions, methods, as_json, out_dir) -> None:
     from armtrack_cli import pipeline
 
     def work(folder, out):
-        from armtrack_cli.compare.errors import accuracy_3d
-
         r = pipeline.compare(folder, methods=tuple(methods), out=out)
-        return {**{k: v for k, v in r.items() if k not in ("rows", "table")},
-                "accuracy_3d": accuracy_3d(r["rows"])}, text.compare_lines(folder, r)
+        return text.compare_summary(r), text.compare_lines(folder, r)
 
     each(sessions, out_dir, as_json, work)
 

@@ -60,6 +60,15 @@ def _imu_offset(r: dict[str, Any]) -> list[str]:
     return [f"  IMU offset {o['value']:+.3f} s (declared{seen})"]
 
 
+def compare_summary(r: dict[str, Any]) -> dict[str, Any]:
+    """compare's --json: its result without the rows and the printed table, with the 3-D
+    accuracy of each method and joint (errors.accuracy_3d)."""
+    from armtrack_cli.compare.errors import accuracy_3d
+
+    return {**{k: v for k, v in r.items() if k not in ("rows", "table")},
+            "accuracy_3d": accuracy_3d(r["rows"])}
+
+
 def compare_lines(folder: str, r: dict[str, Any]) -> list[str]:
     excl = {k: v for k, v in r["excluded_frames"].items() if v}
     lines = [f"{folder}:", r["table"]]
