@@ -13,6 +13,19 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
     (file or sys.stderr).write(f"warning: {text}\n")
 
 
+def _interrupted() -> int:
+    """The one line of an interrupt, and exit code 130. Objects the interrupt left half-built
+    (llvmlite's, when it fell inside numba's set-up) may fail in their finalisers at exit and
+    print "Exception ignored in …" tracebacks: those are silenced, for the user has been told."""
+    sys.stderr.write("error: interrupted\n")
+    _quiet_finalisers()
+    return 130
+
+
+def _quiet_finalisers() -> None:
+    sys.unraisablehook = lambda _unraisable: None
+
+
 def main() -> int:
     import warnings
 
@@ -22,18 +35,19 @@ def main() -> int:
 
         from armtrack_cli.cli import main as commands
 
-        return commands.main(standalone_mode=False) or 0
-    except KeyboardInterrupt:
-        sys.stderr.write("error: interrupted\n")
-        return 130
+        code = commands.main(standalone_mode=False) or 0
+    except KeyboardInterrupt:  # before click is imported too
+        return _interrupted()
     except click.exceptions.Abort:
-        sys.stderr.write("error: interrupted\n")
-        return 130
+        return _interrupted()
     except click.exceptions.Exit as exc:
         return exc.exit_code
     except click.ClickException as exc:
         exc.show()
         return exc.exit_code
+    if code == 130:  # the command's own interrupt line is written (cli/commands._Group)
+        _quiet_finalisers()
+    return code
 
 
 if __name__ == "__main__":
