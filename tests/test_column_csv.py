@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 
 from armtrack_cli.session import outputs
-from armtrack_cli.session.column_csv import write_columns
-from armtrack_cli.session.outputs import write_table
+from armtrack_cli.session.column_csv import write_column_blocks, write_columns
+from armtrack_cli.session.outputs import output_set, write_table
 
 detect_stage = importlib.import_module("armtrack_cli.pipeline.detect")
 
@@ -34,6 +34,56 @@ def test_write_columns_writes_write_tables_bytes(tmp_path, monkeypatch, n):
     write_table(tmp_path / "b.csv", pd.DataFrame(cols), command="detect", settings={"k": 1})
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
     assert (tmp_path / "a.meta.json").read_bytes() == (tmp_path / "b.meta.json").read_bytes()
+
+
+@pytest.mark.parametrize("cuts", [[0], [1, 1], [0, 2500, 2501, 4999], [1700, 3400]])
+def test_blocks_write_the_joined_tables_bytes(tmp_path, monkeypatch, cuts):
+    """A table written a window at a time (empty windows and one-row windows among them) is
+    byte for byte the table pandas writes whole; the settings, a function, are asked for once
+    the rows are written."""
+    monkeypatch.setattr(outputs, "CSV_BLOCK", 1000)
+    cols, written = _columns(5000), []
+    edges = [0, *cuts, 5000]
+
+    def blocks():
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            written.append(hi)
+            yield {k: v[lo:hi] for k, v in cols.items()}
+
+    def settings():
+        assert written[-1] == 5000  # every block made before the summary
+        return {"k": 1}
+
+    write_column_blocks(tmp_path / "a.csv", blocks(), command="fuse", settings=settings)
+    write_table(tmp_path / "b.csv", pd.DataFrame(cols), command="fuse", settings={"k": 1})
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    assert (tmp_path / "a.meta.json").read_bytes() == (tmp_path / "b.meta.json").read_bytes()
+
+
+def test_a_failure_between_blocks_leaves_nothing(tmp_path):
+    """The second window failing (a method diverging) after the first was written: neither
+    the table nor its sidecar nor a temp file is left, and an earlier table stays as it was."""
+    (tmp_path / "a.csv").write_text("old\n")
+    cols = _columns(100)
+
+    def blocks():
+        yield {k: v[:50] for k, v in cols.items()}
+        raise RuntimeError("the second window diverged")
+
+    with pytest.raises(RuntimeError), output_set():
+        write_column_blocks(tmp_path / "a.csv", blocks(), command="fuse")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv"]
+    assert (tmp_path / "a.csv").read_text() == "old\n"
+
+
+def test_blocks_must_keep_the_first_blocks_columns(tmp_path):
+    cols = _columns(10)
+    changed = {**{k: v[5:] for k, v in cols.items()}, "ok": cols["ok"][5:] * 1.0}  # int -> float
+    for second in ({k: v[5:] for k, v in cols.items() if k != "u"}, changed):
+        with pytest.raises(ValueError, match="first's columns"):
+            write_column_blocks(tmp_path / "a.csv", [{k: v[:5] for k, v in cols.items()}, second],
+                                command="fuse")
+    assert not list(tmp_path.iterdir())
 
 
 def test_palm_blobs_accumulate_to_the_per_frame_tables_rows():
