@@ -4,10 +4,12 @@ and lays out the tables."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from armtrack_cli.core.windows import Window
 from armtrack_cli.measures import CATALOGUE, Inputs, measure_rows
 from armtrack_cli.measures.angles import hand_frames, wrist_angles_deg
 from armtrack_cli.session.config import Session
@@ -25,7 +27,6 @@ def columns(traj, names) -> np.ndarray | None:
     if not all(c in traj for c in names):
         return None
     return np.column_stack([np.asarray(traj[c], dtype=float) for c in names])
-
 
 
 
@@ -58,6 +59,18 @@ def kinematics_cells(traj: pd.DataFrame | dict, session: Session, *,
     t_start, t_end (KINEMATICS_COLUMNS; outputs.write_rows writes them without pandas)."""
     rows = measure_rows(trajectory_inputs(traj, session, q_WB=q_WB))
     return [{**r, "value": _cell(r["value"])} for r in rows]
+
+
+def kinematics_cells_windowed(read: Callable[[Window], dict], t0: float, t1: float,
+                              session: Session) -> list[dict]:
+    """kinematics_cells of a trajectory a stage holds a window at a time (issue 15):
+    ``read(w)`` gives the trajectory table's columns (trajectory-METHOD.csv's names, and
+    "q_WB" (N, 4) where the stage has the IMU's orientation) of its frames in [w.start,
+    w.stop], in time order; [t0, t1] the trajectory's first and last frame times.
+    Today one window over the whole span (the measures' windows are to come)."""
+    table = read(Window(-np.inf, np.inf, t0, t1))
+    q_WB = table.pop("q_WB", None)
+    return kinematics_cells(table, session, q_WB=q_WB)
 
 
 def kinematics_table(traj: pd.DataFrame | dict, session: Session, *,
@@ -116,6 +129,15 @@ def _windows(est: list[dict]) -> list[tuple] | None:
             if np.isnan(w[k]) and not np.isnan(v):
                 w[k] = v
     return [tuple(np.float64(v) for v in w) for w in win.values()] or None
+
+
+def measure_comparison_windowed(method: str, est: list[dict],
+                                read_truth: Callable[[Window], Inputs | None], t0: float,
+                                t1: float) -> list[dict]:
+    """measure_comparison with the ground truth's Inputs (truth_inputs') read a window at a
+    time, ``read_truth(w)`` those of the trajectory's frames in [w.start, w.stop] (issue 15).
+    Today one window over the whole span (the measures' windows are to come)."""
+    return measure_comparison(method, est, read_truth(Window(-np.inf, np.inf, t0, t1)))
 
 
 def measure_comparison(method: str, est: list[dict], truth: Inputs | None) -> list[dict]:
