@@ -16,7 +16,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from armtrack_cli.pipeline.report import _tracked, _verdict
+from armtrack_cli.pipeline.coverage import tracked as _tracked
+from armtrack_cli.pipeline.report import _verdict
 from armtrack_cli.report import SessionReport, fonts, progress, quality, render, summary, truth, words
 from armtrack_cli.session.workfolder import WorkFolder
 

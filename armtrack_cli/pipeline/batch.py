@@ -20,29 +20,29 @@ import pandas as pd
 
 from armtrack_cli.core.errors import ArmtrackError, ConfigError
 from armtrack_cli.pipeline.common import out_dir
+from armtrack_cli.pipeline.coverage import durations, tracked, video_frames
 from armtrack_cli.pipeline.run import run
-from armtrack_cli.session.config import load_session
+from armtrack_cli.session.config import Session, load_session
 from armtrack_cli.session.outputs import write_table
 from armtrack_cli.session.tables import read_csv_table, read_kinematics
 from armtrack_cli.session.workfolder import WorkFolder
 
 COHORT_FIRST = ("session", "status", "subject", "recorded", "task", "side", "method", "stages_run",
-                "frames", "detected_pct", "duration_s", "wrist_rmse_cm", "elbow_rmse_cm", "error",
-                "warnings")
+                "frames", "detected_pct", "duration_s", "recorded_s", "wrist_rmse_cm",
+                "elbow_rmse_cm", "error", "warnings")
 
 
-def _quality(work: WorkFolder, method: str) -> dict[str, Any]:
-    """Data-quality figures from the session's outputs (NaN where an output is absent)."""
-    row: dict[str, Any] = {"frames": np.nan, "detected_pct": np.nan, "duration_s": np.nan,
+def _quality(work: WorkFolder, method: str, session: Session) -> dict[str, Any]:
+    """Data-quality figures from the session's outputs (NaN where an output is absent): the
+    report's (pipeline/coverage.py): frames and % tracked (a palm session's over every video
+    frame), the span measured (duration_s) and recorded (recorded_s)."""
+    row: dict[str, Any] = {"frames": np.nan, "detected_pct": np.nan,
                            "wrist_rmse_cm": np.nan, "elbow_rmse_cm": np.nan}
     if work.has("detections.csv"):
-        det = read_csv_table(work / "detections.csv", ("frame",), "")
-        row["frames"] = int(det["frame"].nunique())
-        if "ok" in det:
-            row["detected_pct"] = round(100.0 * float(det["ok"].mean()), 3)
-    if work.has(f"trajectory-{method}.csv"):
-        t = read_csv_table(work / f"trajectory-{method}.csv", ("t",), "")["t"]
-        row["duration_s"] = round(float(t.iloc[-1] - t.iloc[0]), 6)
+        pct, n = tracked(work, session.kind,
+                         video_frames(session) if session.kind == "palm" else 0)
+        row.update(frames=n, detected_pct=round(pct, 3))
+    row["duration_s"], row["recorded_s"] = durations(work, method)
     if work.has("errors.csv"):
         e = read_csv_table(work / "errors.csv", ("method", "joint", "axis", "rmse_cm"), "")
         for j in ("wrist", "elbow"):
@@ -85,7 +85,8 @@ def run_one(folder: str, out: str | None, options: dict[str, Any]) -> list[dict[
     work = WorkFolder(out_dir(s, out))
     rows = []
     for m in r["methods"]:
-        rows.append({**base, **meta, "method": m, **_quality(work, m), **_measures(work, m)})
+        rows.append({**base, **meta, "method": m, **_quality(work, m, s),
+                     **_measures(work, m)})
     return rows or [{**base, **meta}]
 
 

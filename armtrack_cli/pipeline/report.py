@@ -16,6 +16,7 @@ from armtrack_cli.compare.errors import truth_at
 from armtrack_cli.core.errors import ArmtrackError, ConfigError
 from armtrack_cli.pipeline import arm_model
 from armtrack_cli.pipeline.common import out_dir
+from armtrack_cli.pipeline.coverage import tracked, video_frames
 from armtrack_cli.report import Quality, SessionReport, render
 from armtrack_cli.report.quality import coverage, verdict
 from armtrack_cli.session.camera_yaml import read_camera_yaml
@@ -25,7 +26,6 @@ from armtrack_cli.session.info import describe_imu
 from armtrack_cli.session.outputs import write_bytes
 from armtrack_cli.session.qualisys import read_qualisys, select_markers, to_world
 from armtrack_cli.session.tables import read_csv_table, read_kinematics, read_measures, read_trajectory
-from armtrack_cli.session.video import probe_video
 from armtrack_cli.session.workfolder import WorkFolder
 
 PREFERENCE = {"palm": ("ukf-palm",), "arm": ("arm-smoother", "pf-constraint", "pf", "ukf", "ekf", "inertial"),
@@ -36,35 +36,10 @@ def _method(work: WorkFolder, kind: str) -> str | None:
     return next(iter(work.trajectories(PREFERENCE[kind])), None)
 
 
-def _tracked(work: WorkFolder, kind: str, video_frames: int = 0) -> tuple[float, int]:
-    """(% of frames with a wrist detection, or with at least three palm blobs; frames). A palm
-    session's detections.csv has no row for a frame without blobs: its frames are the video's
-    (``video_frames``), not up to the last frame with a blob."""
-    p = work / "detections.csv"
-    if not work.has("detections.csv"):
-        return float("nan"), 0
-    if kind == "palm":
-        d = read_csv_table(p, ("frame", "blob"), "run `armtrack detect SESSION` first")
-        n = max(int(d["frame"].max()) + 1 if len(d) else 0, video_frames)
-        per = d.groupby("frame").size()
-        return (100.0 * float((per >= 3).sum()) / n if n else float("nan")), n
-    d = read_csv_table(p, ("frame", "ok"), "run `armtrack detect SESSION` first")
-    return (100.0 * float(d["ok"].mean()) if len(d) else float("nan")), len(d)
-
-
-def _video_frames(session: Session) -> int:
-    """Frames in the session's video; 0 where it cannot be read (the count then comes from
-    the detections alone)."""
-    try:
-        return probe_video(session.camera.video).n_frames if session.camera else 0
-    except ArmtrackError:
-        return 0
-
-
 def _quality(session: Session, work: WorkFolder, notes: list[str]) -> Quality:
     q: dict[str, Any] = {"imu_offset_s": None}
-    q["tracked_pct"], q["frames"] = _tracked(work, session.kind,
-                                                 _video_frames(session) if session.kind == "palm" else 0)
+    q["tracked_pct"], q["frames"] = tracked(work, session.kind,
+                                            video_frames(session) if session.kind == "palm" else 0)
     if work.has("camera.yaml"):
         err = read_camera_yaml(work / "camera.yaml").reprojection_error_px
         q["reprojection_px"] = float("nan") if err is None else err

@@ -145,28 +145,54 @@ def _limits(values: list[float]) -> tuple[float, float] | None:
     return mid - need / 2, mid + need / 2
 
 
+def positions(reports: list[SessionReport]) -> tuple[list[float], str]:
+    """Each session's place on the charts' x-axis and the axis's words: days since the first
+    session when every session's date is known (sessions a day and two months apart are not
+    drawn the same distance apart), else the order the sessions are in."""
+    from datetime import datetime
+
+    try:
+        when = [datetime.fromisoformat(r.date) for r in reports]
+        days = [(d - when[0]).total_seconds() / 86400 for d in when]
+    except (TypeError, ValueError):  # a date not recorded or not ISO; naive beside aware
+        return [float(k) for k in range(1, len(reports) + 1)], "sessions in date order"
+    return days, "days since the first session"
+
+
+def _ticks(x: list[float], reports: list[SessionReport]) -> tuple[list[float], list[str]]:
+    """At most four dates under a chart: the sessions nearest to 0, 1/3, 2/3 and all of the
+    axis, none within 1/6 of the axis of the one before (more would overlap)."""
+    span = (x[-1] - x[0]) or 1.0
+    keep: list[int] = []
+    for f in (0.0, 1 / 3, 2 / 3, 1.0):
+        k = min(range(len(x)), key=lambda i: abs(x[i] - x[0] - f * span))
+        if not keep or x[k] - x[keep[-1]] >= span / 6:
+            keep.append(k)
+        elif f == 1.0 and len(keep) > 1:
+            keep[-1] = k  # the last session's date over its near neighbour's
+    return [x[k] for k in keep], [reports[k].day for k in keep]
+
+
 def chart_pages(reports: list[SessionReport]) -> list:
     shown = [m for m in KEY if any(math.isfinite(v) for v, _ in series(reports, m))]
+    x, axis = positions(reports)
 
     def charts(these):
         def draw(fig):
             for k, m in enumerate(these):
                 ax = fig.add_axes([0.10 + 0.45 * (k % 2), 0.70 - 0.205 * (k // 2), 0.36, 0.14])
                 s = series(reports, m)
-                x = list(range(1, len(s) + 1))
                 ax.errorbar(x, [v for v, _ in s], yerr=[2 * sd if math.isfinite(sd) else 0 for _, sd in s],
                             color="black", marker="o", markerfacecolor="white", capsize=3, linewidth=1)
-                step = -(-len(x) // 4)  # at most 4 dates under a chart: more overlap
-                ax.set_xticks(x, [r.day if i % step == 0 else "" for i, r in enumerate(reports)],
-                              fontsize=7)
+                ax.set_xticks(*_ticks(x, reports), fontsize=7)
                 lim = _limits([v + e * sd for v, sd in s for e in (-2, 0, 2) if math.isfinite(sd)]
                               + [v for v, _ in s])
                 if lim:
                     ax.set_ylim(*lim)
                 unit = words.MEASURES[m][1]
                 ax.set_title(words.name(m) + (f" ({unit})" if unit else ""), fontsize=8)
-            fig.text(0.07, 0.9, "Each measure by session date; bars show ± 2 SD of the tracking's "
-                     "uncertainty (none where it gives none).", fontsize=8.5)
+            fig.text(0.07, 0.9, f"Each measure by session date (across: {axis}); bars show ± 2 SD "
+                     "of the tracking's uncertainty (none where it gives none).", fontsize=8.5)
             fig.text(0.07, 0.884, "The y-axes do not start at 0; each is at least 20 % of its "
                      "largest value tall, so a small change looks small.", fontsize=8.5)
         return draw

@@ -26,22 +26,26 @@ COVER_CARE = 0.9  # measures over less than this share of the recording ask for 
 
 
 def coverage(r: SessionReport) -> tuple[float, float, float] | None:
-    """(start, end, recording length) in s: the span the session's measures are taken over
-    (kinematics' t_start, t_end: from the first to the last frame with a wrist) and the
-    trajectory's whole span, one frame interval included; None without both."""
-    import numpy as np
-
+    """spans() of the session's measures (kinematics' t_start, t_end) in its trajectory."""
     k, d = r.kinematics, r.trajectory
-    if k is None or d is None or "t_start" not in k or len(d) < 2:
+    if k is None or d is None or "t_start" not in k:
         return None
     row = k[k["segment"] == "session"]
-    t = d["t"].to_numpy(dtype=float)
-    if not len(row) or not np.isfinite(t).all():
+    if not len(row):
         return None
-    a, b = float(row["t_start"].iloc[0]), float(row["t_end"].iloc[0])
+    return spans(float(row["t_start"].iloc[0]), float(row["t_end"].iloc[0]),
+                 d["t"].to_numpy(dtype=float))
+
+
+def spans(a: float, b: float, t) -> tuple[float, float, float] | None:
+    """(start, end, recording length) in s: the span measures are taken over, [a, b] (from
+    the first to the last frame with a wrist), and the trajectory's whole span (frame times
+    ``t``), one frame interval included in each; None without two finite frames and a span."""
+    import numpy as np
+
+    if len(t) < 2 or not np.isfinite(t).all() or not (np.isfinite(a) and np.isfinite(b)):
+        return None
     dt = float(np.median(np.diff(t)))
-    if not (np.isfinite(a) and np.isfinite(b)):
-        return None
     return a, b + dt, float(t[-1] - t[0]) + dt
 
 
