@@ -13,6 +13,7 @@ PALM_ANGLES = ("wrist_flexion", "wrist_deviation", "wrist_pronation")
 PLAIN = {"movement_units": "movement units (sub-movements; fewer = smoother)",
          "sparc": "smoothness, SPARC (nearer 0 = smoother)",
          "segments": "separate movements found"}
+KEY_WIDTH = 100  # characters of a key-measure line at its size on page 1
 PATH = ("wrist_peak_speed", "wrist_mean_speed", "movement_time", "wrist_path_length",
         "movement_units", "sparc", "segments")
 
@@ -90,11 +91,32 @@ def key_lines(r: SessionReport) -> list[str]:
         line = angle_line(r, a)
         if line:
             out.append(line)
-    for m in PATH:
+    still = barely_moved(r)
+    if still:
+        out += words.lines_of(still, KEY_WIDTH)
+    for m in () if still else PATH:
         v = value_text(r, m)
         if v is not None:
             out.append(f"{PLAIN.get(m, words.name(m))}: {v}")
     return out or ["no measures: " + ("; ".join(r.notes) or "no movement estimate")]
+
+
+def barely_moved(r: SessionReport) -> str | None:
+    """The words for a wrist whose peak speed is within 2 SD of the speed below which the
+    measures call it still (measures/base.Settings.min_moving_speed): its path measures
+    (speeds, movements, smoothness) are the estimate's noise, not movement (a palm session's
+    still forearm: 0.010 ± 0.002 m/s, nine "movements"), so page 1 does not list them; the
+    measures' table keeps them. None when the wrist moved clearly, or without a value."""
+    from armtrack_cli.measures.base import DEFAULT
+
+    v, sd = lookup(r, "wrist_peak_speed")
+    peak = as_number(v)
+    if not math.isfinite(peak) or peak - 2 * (sd if math.isfinite(sd) else 0.0) \
+            >= DEFAULT.min_moving_speed:
+        return None
+    return (f"wrist path: no clear movement (peak speed {value_text(r, 'wrist_peak_speed')}, "
+            f"within 2 SD of the {DEFAULT.min_moving_speed:g} m/s below which a wrist is still); "
+            "its speeds and movements are not listed here (see the measures' table)")
 
 
 def quality_lines(r: SessionReport) -> list[str]:
