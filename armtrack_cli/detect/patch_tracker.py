@@ -30,6 +30,7 @@ import cv2
 import numpy as np
 
 from armtrack_cli.detect.colour import hue_histogram, range_mask
+from armtrack_cli.detect.frame_rows import FrameRows
 from armtrack_cli.detect.patch_check import HISTORY, Reference, look
 from armtrack_cli.detect.patch_masks import OPEN3, sparse_patch_mask
 from armtrack_cli.detect.regions import Regions
@@ -139,13 +140,14 @@ def track_reference(frame, box, start, low, high):
 
 
 class PatchTracker:
-    """Feed frames in order with ``step``; read per-frame detections with ``detections``."""
+    """Feed frames in order with ``step``; read per-frame detections with ``detections``, or
+    as they become final with ``take`` (detect writes a long session's rows as it goes)."""
 
     def __init__(self, low, high, settings: PatchSettings = PatchSettings(), *,
                  fps: float = 30.0, kernel: bool = True, frames: int = 1024):
         """``kernel``: track with the compiled patch_kernel (False: the OpenCV reference);
-        ``frames``: the rows to hold at first (the video's frame count, when known: the table
-        then never grows by copying)."""
+        ``frames``: the rows to hold at first (a block's, where ``take`` hands them out as it
+        goes; else the video's frame count, when known: the table then never grows)."""
         self.low, self.high, self.s, self.fps = low, high, settings, fps
         self._kernel = None
         if kernel:  # numba's: imported only when a tracker is made
@@ -153,8 +155,7 @@ class PatchTracker:
             self._kernel = WindowTracker(low, high)
         self.hist = hue_histogram(int(low[0]), int(high[0]))
         self.ref = Reference(settings.ref_frames)
-        self.out = np.full((max(int(frames), 1), 6), np.nan)  # u, v, w, h, angle, ok; doubles if short
-        self.n_frames = 0
+        self.rows = FrameRows(frames)  # u, v, w, h, angle, ok of the frames not yet taken
         self.window: tuple[int, int, int, int] | None = None  # set while tracking
         self.last = (np.nan, np.nan, -1)  # u, v and frame of the last accepted detection
         self.vel = (0.0, 0.0)  # px per frame
@@ -169,12 +170,7 @@ class PatchTracker:
     def step(self, frame_index: int, frame) -> None:
         """Frame ``frame_index``, a BGR image or a vision.yuv.YuvFrame (only the search region
         is converted to BGR while tracking, the whole frame while acquiring)."""
-        if frame_index >= self.out.shape[0]:
-            grown = np.full((2 * max(frame_index, self.out.shape[0]), 6), np.nan)
-            grown[:self.out.shape[0]] = self.out
-            self.out = grown
-        self.out[frame_index, 5] = 0
-        self.n_frames = max(self.n_frames, frame_index + 1)
+        self.rows.start(frame_index)
         if self.window is not None and self._track(frame_index, frame):
             return
         self.window = None
@@ -216,7 +212,7 @@ class PatchTracker:
             self.vel = (u - self.last[0], v - self.last[1])
         else:
             self.vel = (0.0, 0.0)
-        self.out[i] = (u, v, rw, rh, ang, 1)
+        self.rows.set(i, (u, v, rw, rh, ang, 1))
         self.last = (u, v, i)
         self.window = tuple(int(c) for c in window)
         self.ref.add(seen, i)
@@ -360,7 +356,7 @@ class PatchTracker:
                 after = mass[k + 1:k + 1 + HISTORY] if k + 1 < mass.size else mass[-HISTORY:]
                 ref = float(np.median(after))
                 if good and self.s.lost_fraction * ref <= mass[k] <= self.s.max_growth * ref:
-                    self.out[f] = (*r, 1)
+                    self.rows.set(f, (*r, 1))
                     self.ref.add(seen, f)
         self.last = (t.rects[-1][0], t.rects[-1][1], t.frames[-1])
         consecutive = len(t.frames) > 1 and t.frames[-2] == t.frames[-1] - 1
@@ -371,10 +367,26 @@ class PatchTracker:
         self.patches += 1
 
     def detections(self, fps: float | None = None) -> np.ndarray:
-        """(n_frames, 6): u, v, width, height, angle (deg), ok — NaN position where not ok.
+        """(n_frames, 6): u, v, width, height, angle (deg), ok — NaN position where not ok
+        (of the frames ``take`` has not handed out: all, if it was never called).
         (``fps`` is the tracker's own, given at construction; kept for callers.)"""
-        if self.patches == 0:  # nothing ever moved: the largest region of the first frame
+        self._settle()
+        return self.rows.held()
+
+    def _settle(self) -> None:
+        """The video ended: if nothing ever moved, the largest region of frame 0 is the patch."""
+        if self.patches == 0:
             first = [t for t in self.tracklets if t.frames and t.frames[0] == 0]
             if first:
                 self._adopt(max(first, key=lambda t: np.median(t.masses)))
-        return self.out[:self.n_frames].copy()
+
+    def take(self, *, final: bool = False) -> tuple[int, np.ndarray]:
+        """(first frame, rows as ``detections``') of the frames no later frame can change,
+        handed out and dropped: every frame before the earliest of this acquisition's
+        tracklets (_adopt may yet report theirs; until a patch was taken, frame 0's hold all);
+        with ``final`` (the video ended: _settle), every frame left."""
+        if final:
+            self._settle()
+        stop = self.rows.n if final or not self.tracklets else \
+            min(t.frames[0] for t in self.tracklets)
+        return self.rows.take(stop)
