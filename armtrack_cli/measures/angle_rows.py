@@ -93,8 +93,8 @@ def angle_values_windowed(read: Callable, wins: list[Window], s: Settings) -> di
              if n >= 10}
     order = {name: OrderStats(stats[name][1], stats[name][2], [r for a, b, _ in rk for r in (a, b)])
              for name, rk in ranks.items()}
-    while order and not all(o.end() for o in _pass(order, read, wins, s, neutral)):
-        pass
+    while order and not all([o.end() for o in _pass(order, read, wins, s, neutral)]):
+        pass  # (a list: every angle's pass ends, not only up to the first still open)
     out = {}
     for name, (n, lo, hi) in stats.items():
         if n == 0 and name in why:

@@ -55,8 +55,8 @@ def measure_rows_windowed(read: Reader, wins: list[Window], s: Settings = DEFAUL
                                        order[k[0]]))
     span = {str(n): w for n, w in enumerate(windows, 1)}
     span["session"] = (clock.t0, clock.t_end)
-    return [{"measure": m, "segment": seg, "value": vals[(m, seg)],
-             "sd": sds.get((m, seg), float("nan")), "unit": CATALOGUE[m],
+    return [{"measure": m, "segment": seg, "value": vals.pop((m, seg)),  # (popped: the
+             "sd": sds.pop((m, seg), float("nan")), "unit": CATALOGUE[m],  # rows replace them)
              "t_start": float(span[seg][0]), "t_end": float(span[seg][1])} for m, seg in keys]
 
 
