@@ -260,3 +260,36 @@ def test_segments_of_the_stream_equal_segments():
         runs.add(k0, x)
     clock = Clock(float(t[0]), float(np.median(np.diff(inp.t))), t.size)
     assert own_segments(runs.finish(t.size), clock, float(v.max()), S) == segments(t, v, S)
+
+
+def test_the_stage_interface_windows(monkeypatch):
+    """kinematics_cells_windowed and measure_comparison_windowed over 5 windows of 60 s: the
+    same cells (values' text) as kinematics_cells and measure_comparison on the whole."""
+    inp, truth = reaches(5, seed=4), reaches(5, seed=4, noise=1e-3)
+    table = {"t": inp.t, **{f"wrist_{a}": inp.wrist[:, i] for i, a in enumerate("xyz")},
+             **{f"elbow_{a}": inp.elbow[:, i] for i, a in enumerate("xyz")}}
+
+    class Sess:
+        class meta:
+            task, side = "reach", "right"
+
+        class arm:
+            shoulder_m = [0.3, 0.55, 0.35]
+        imu = None
+
+    monkeypatch.setattr(windows_mod, "WINDOW_S", 60.0)
+    t0, t1 = inp.t[0], inp.t[-1]
+    assert len(kinematics._measure_windows(t0, t1)) == 5
+
+    def read(w):
+        sl = w.read(inp.t)
+        return {k: v[sl] for k, v in table.items()}
+
+    est = kinematics.kinematics_cells_windowed(read, t0, t1, Sess)
+    whole = kinematics.kinematics_cells(table, Sess)
+    assert [(r["measure"], r["segment"], r["value"]) for r in est] == \
+        [(r["measure"], r["segment"], r["value"]) for r in whole]
+    got = kinematics.measure_comparison_windowed("m", est, reader(truth), t0, t1)
+    want = kinematics.measure_comparison("m", est, truth)
+    assert [(r["measure"], r["segment"], r["truth"]) for r in got] == \
+        [(r["measure"], r["segment"], r["truth"]) for r in want]
