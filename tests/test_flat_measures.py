@@ -293,3 +293,25 @@ def test_the_stage_interface_windows(monkeypatch):
     want = kinematics.measure_comparison("m", est, truth)
     assert [(r["measure"], r["segment"], r["truth"]) for r in got] == \
         [(r["measure"], r["segment"], r["truth"]) for r in want]
+
+
+def test_window_profiles_are_the_whole_speed_profile():
+    """Each window's speed profile on its inner span: the whole span's clock to the bit, its
+    positions and speeds (signal.speed_profile) to 1e-12."""
+    from armtrack_cli.measures.clock import find_clock
+    from armtrack_cli.measures.signal import speed_profile
+    from armtrack_cli.measures.windowed import _own_frames, profiles
+
+    inp = reaches(6)
+    t, p, v = speed_profile(inp.t, inp.wrist, S)
+    wins = windows(inp.t[0], inp.t[-1], 60.0, 20.0)
+    clock = find_clock(_own_frames(reader(inp), wins), S)
+    assert clock.n == t.size
+    seen = 0
+    for pr in profiles(reader(inp), wins, clock, S):
+        k = np.arange(pr.k0 + pr.a, pr.k0 + pr.b)
+        assert k[0] == seen and np.array_equal(pr.t[pr.a:pr.b], t[k])
+        assert np.abs(pr.v[pr.a:pr.b] - v[k]).max() < 1e-12
+        assert np.abs(pr.p[pr.a:pr.b] - p[k]).max() < 1e-12
+        seen = k[-1] + 1
+    assert seen == t.size
