@@ -117,6 +117,6 @@ def _pass(order: dict, read, wins, s, neutral) -> list[OrderStats]:
     for piece in pieces(read, wins, s, neutral):
         for name, o in order.items():
             x = piece.get(name)
-            if x is not None and not isinstance(x, str) and o.open():
+            if x is not None and not isinstance(x, str) and o.pending():
                 o.add(x)
     return list(order.values())

@@ -160,11 +160,11 @@ class OrderStats:
             if lo == hi:
                 st["value"] = lo
 
-    def open(self) -> list[int]:
+    def pending(self) -> list[int]:
         return [r for r, st in self.state.items() if st["value"] is None]
 
     def begin(self) -> None:
-        for r in self.open():
+        for r in self.pending():
             st = self.state[r]
             st["counts"] = np.zeros(self.BINS, int)
             st["kept"] = []
@@ -172,7 +172,7 @@ class OrderStats:
             st["least"], st["most"] = np.inf, -np.inf  # of the values in [lo, hi]
 
     def add(self, x: np.ndarray) -> None:
-        for r in self.open():
+        for r in self.pending():
             st = self.state[r]
             inside = (x >= st["lo"]) & ((x <= st["hi"]) if st["closed"] else (x < st["hi"]))
             st["under"] += int(np.count_nonzero(x < st["lo"]))
@@ -188,7 +188,7 @@ class OrderStats:
 
     def end(self) -> bool:
         """After a pass: True when every rank has its value."""
-        for r in self.open():
+        for r in self.pending():
             st = self.state[r]
             if st["least"] == st["most"]:  # every value left in the range is one (ties)
                 st["value"] = st["least"]
@@ -204,7 +204,7 @@ class OrderStats:
                 st["lo"], st["hi"] = float(edges[j]), float(edges[j + 1])
                 st["collect"] = (st["counts"][j] <= self.COLLECT or not st["lo"] < st["hi"]
                                  or (st["lo"], st["hi"]) == old)  # no narrower in floats
-        return not self.open()
+        return not self.pending()
 
     def value(self, r: int) -> float:
         return self.state[r]["value"]
