@@ -15,6 +15,10 @@
     peaks.py       scipy's find_peaks in numpy, and peak counts of many rows at once
     vec3.py        dot products and lengths of 3-vectors, numpy's bits, faster
     table.py       the rows of kinematics-METHOD.csv for one trajectory
+    windowed.py    the same rows of a long trajectory read a window at a time (issue 15)
+    clock.py       its uniform clock and each window's speed profile on it
+    stream.py      onset, offset, runs, peaks and percentiles over a signal's pieces
+    angle_rows.py  its angles' session rows; windowed_sd.py its posterior SDs
 
 A measure that cannot be computed raises ``NotComputable(why)``; ``table`` turns it into a
 "not computable: why" cell, never a number. docs/measures.md defines every measure.

@@ -58,12 +58,14 @@ def neutral_quaternion(t: np.ndarray, q: np.ndarray, s: Settings) -> np.ndarray:
 
 
 def forearm_pronation_deg(t: np.ndarray, q_WB: np.ndarray, axis_B: np.ndarray, side: str,
-                          s: Settings = DEFAULT) -> np.ndarray:
+                          s: Settings = DEFAULT, neutral: np.ndarray | None = None) -> np.ndarray:
     """(N,) pronation (+) / supination (−) of the forearm relative to its pose in the first
     second: the twist of q0* ⊗ q about the forearm axis in B (swing-twist decomposition).
     Pronation turns a right forearm clockwise seen from the elbow, i.e. negatively about the
-    elbow→hand axis; a left one positively."""
-    q_rel = quat.multiply(quat.conjugate(neutral_quaternion(t, q_WB, s))[None], q_WB)
+    elbow→hand axis; a left one positively. ``neutral``: that pose, when t is not the
+    session's start (a long session's later windows: measures/windowed.py)."""
+    q0 = neutral_quaternion(t, q_WB, s) if neutral is None else neutral
+    q_rel = quat.multiply(quat.conjugate(q0)[None], q_WB)
     twist = 2 * np.arctan2(q_rel[:, 1:] @ axis_B, q_rel[:, 0])
     twist = (twist + np.pi) % (2 * np.pi) - np.pi
     ok = np.isfinite(twist)

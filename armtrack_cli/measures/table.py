@@ -14,7 +14,7 @@ from armtrack_cli.measures.base import DEFAULT, ONE_MOVEMENT, NotComputable, Set
 from armtrack_cli.measures.draws import PathDraws
 from armtrack_cli.measures.segments import segments
 from armtrack_cli.measures.signal import speed_profile
-from armtrack_cli.measures.uncertainty import draw_blocks, spread_rows
+from armtrack_cli.measures.uncertainty import BLOCK_SAMPLES, draw_blocks, spread_rows
 
 REACH_TASKS = ("reach", "reach-grasp")
 ANGLES = {  # name: unit with its convention
@@ -192,9 +192,17 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
     at a time: the path measures of a block at once (draws.py), and its angles (angle_draws.py)."""
     if inp.wrist_sd is None and inp.angles_sd is None:
         return {}
+    return dict(zip(keys, spread_rows(draw_values(inp, keys, windows, s)).tolist()))
+
+
+def draw_values(inp: Inputs, keys, windows: list, s: Settings,
+                block_samples: int = BLOCK_SAMPLES) -> np.ndarray:
+    """(len(keys), s.draws): each measure's value in each draw (NaN: none); the posterior as
+    _uncertainty samples it (inp has wrist_sd or angles_sd), block_samples draws × frames
+    at a time (the same draws however grouped: uncertainty.draw_blocks)."""
     none = iter(lambda: None, 0)  # no posterior for this input: None for every block
-    e_w = draw_blocks(inp.t, inp.wrist_sd, s) if inp.wrist_sd is not None else none
-    e_a = (draw_blocks(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1))
+    e_w = draw_blocks(inp.t, inp.wrist_sd, s, block_samples) if inp.wrist_sd is not None else none
+    e_a = (draw_blocks(inp.t, inp.angles_sd, replace(s, seed=s.seed + 1), block_samples)
            if inp.angles_sd is not None else none)
     got = np.full((len(keys), s.draws), np.nan)  # a measure's draws a row: no small array
     #                          per measure and block (60 minutes: 430,000 of them, 23 MB)
@@ -211,7 +219,7 @@ def _uncertainty(inp: Inputs, keys, windows: list, s: Settings) -> dict[tuple[st
         for i, k in enumerate(keys):
             got[i, done:done + c] = by_path.get(k, by_angle.get(k, np.nan))
         done += c
-    return dict(zip(keys, spread_rows(got).tolist()))
+    return got
 
 
 def _measured_span(inp: Inputs) -> tuple[float, float]:

@@ -9,9 +9,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from armtrack_cli.core import windows as windows_mod
 from armtrack_cli.core.windows import Window
 from armtrack_cli.measures import CATALOGUE, Inputs, measure_rows
 from armtrack_cli.measures.angles import hand_frames, wrist_angles_deg
+from armtrack_cli.measures.windowed import measure_rows_windowed
 from armtrack_cli.session.config import Session
 
 if TYPE_CHECKING:
@@ -66,11 +68,29 @@ def kinematics_cells_windowed(read: Callable[[Window], dict], t0: float, t1: flo
     """kinematics_cells of a trajectory a stage holds a window at a time (issue 15):
     ``read(w)`` gives the trajectory table's columns (trajectory-METHOD.csv's names, and
     "q_WB" (N, 4) where the stage has the IMU's orientation) of its frames in [w.start,
-    w.stop], in time order; [t0, t1] the trajectory's first and last frame times.
-    Today one window over the whole span (the measures' windows are to come)."""
-    table = read(Window(-np.inf, np.inf, t0, t1))
-    q_WB = table.pop("q_WB", None)
-    return kinematics_cells(table, session, q_WB=q_WB)
+    w.stop], in time order; [t0, t1] the trajectory's first and last frame times. A span of
+    one window (core/windows.py) is read whole and measured as kinematics_cells measures it;
+    a longer one a window at a time (measures/windowed.py, docs/measures.md)."""
+    wins = _measure_windows(t0, t1)
+    if len(wins) == 1:
+        table = read(Window(-np.inf, np.inf, t0, t1))
+        q_WB = table.pop("q_WB", None)
+        return kinematics_cells(table, session, q_WB=q_WB)
+
+    def inputs(w: Window) -> Inputs:
+        table = read(w)
+        q_WB = table.pop("q_WB", None)
+        return trajectory_inputs(table, session, q_WB=q_WB)
+
+    rows = measure_rows_windowed(inputs, wins)
+    for r in rows:  # in place: a 60-minute session's 5,700 rows once, not twice
+        r["value"] = _cell(r["value"])
+    return rows
+
+
+def _measure_windows(t0: float, t1: float) -> list[Window]:
+    """core/windows.windows with its settings as they stand (tests shorten WINDOW_S)."""
+    return windows_mod.windows(t0, t1, windows_mod.WINDOW_S, windows_mod.MARGIN_S)
 
 
 def kinematics_table(traj: pd.DataFrame | dict, session: Session, *,
@@ -136,8 +156,14 @@ def measure_comparison_windowed(method: str, est: list[dict],
                                 t1: float) -> list[dict]:
     """measure_comparison with the ground truth's Inputs (truth_inputs') read a window at a
     time, ``read_truth(w)`` those of the trajectory's frames in [w.start, w.stop] (issue 15).
-    Today one window over the whole span (the measures' windows are to come)."""
-    return measure_comparison(method, est, read_truth(Window(-np.inf, np.inf, t0, t1)))
+    A span of one window is read whole; a longer one measured a window at a time
+    (measures/windowed.py), on the estimate's segments as measure_comparison does."""
+    wins = _measure_windows(t0, t1)
+    if len(wins) == 1:
+        return measure_comparison(method, est, read_truth(Window(-np.inf, np.inf, t0, t1)))
+    has_truth = read_truth(wins[0]) is not None
+    rows = measure_rows_windowed(read_truth, wins, windows=_windows(est)) if has_truth else []
+    return _comparison_rows(method, est, rows)
 
 
 def measure_comparison(method: str, est: list[dict], truth: Inputs | None) -> list[dict]:
@@ -145,8 +171,11 @@ def measure_comparison(method: str, est: list[dict], truth: Inputs | None) -> li
     session/plain_tables.kinematics_rows reads them) with the same measure of the ground
     truth, the error (estimate − truth) and the error in % of truth."""
     windows = _windows(est)  # the estimate's segments
-    t_rows = ({(r["measure"], r["segment"]): r["value"] for r in measure_rows(truth, windows=windows)}
-              if truth else {})
+    return _comparison_rows(method, est, measure_rows(truth, windows=windows) if truth else [])
+
+
+def _comparison_rows(method: str, est: list[dict], truth_rows: list[dict]) -> list[dict]:
+    t_rows = {(r["measure"], r["segment"]): r["value"] for r in truth_rows}
     out = []
     for r in est:
         tv = t_rows.get((r["measure"], r["segment"]),
