@@ -163,7 +163,11 @@ def test_window_summaries_combine_as_documented():
     assert out["orientation_error_model"] == "gyro"
 
 
-def test_the_bench_long_session_is_several_windows_the_samples_one():
-    assert len(windows_mod.windows(0.0, 600.0)) == 2
-    assert len(windows_mod.windows(0.0, 19.97)) == 1
-    assert fuse_stage._longer_than_a_window  # the gate fuse() asks first
+def test_the_gate_fuse_asks_first(detected, monkeypatch):
+    from armtrack_cli.session.config import load_session
+
+    session = load_session(detected)
+    assert not fuse_stage._longer_than_a_window(session)  # 20 s: one window
+    _short_windows(monkeypatch)
+    assert fuse_stage._longer_than_a_window(session)
+    assert len(windows_mod.windows(0.0, 600.0, 300.0, 20.0)) == 2  # the 10-minute bench

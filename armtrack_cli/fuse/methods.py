@@ -271,8 +271,7 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
     """``forward_done``: called once the compiled forward pass (the particles') is done, before
     what follows it (the smoothers, whose memory peaks): work a caller runs beside that pass
     ends there (pipeline/fuse.py: the IMU offset's check; issue 15). ``summary_rows``: the
-    frames the arm smoother's summary is over (a window's inner frames: pipeline/
-    fuse_windows.py); all by default."""
+    arm smoother's summary's frames (a window's own: pipeline/fuse_windows.py); all if None."""
     if method in ("inertial", "ekf", "ukf"):
         est = run_gaussian(inp, x0, P0, proj, s, method)
     elif method == "pf":
