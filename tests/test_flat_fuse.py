@@ -171,3 +171,19 @@ def test_the_gate_fuse_asks_first(detected, monkeypatch):
     _short_windows(monkeypatch)
     assert fuse_stage._longer_than_a_window(session)
     assert len(windows_mod.windows(0.0, 600.0, 300.0, 20.0)) == 2  # the 10-minute bench
+
+
+@pytest.mark.filterwarnings("ignore:.*clock offset")  # 2 s of detections in the first span
+def test_a_window_without_a_detection_leaves_its_rows_empty(detected, tmp_path, monkeypatch):
+    _short_windows(monkeypatch)
+    out = _work(detected, tmp_path, "gap")
+    det = pd.read_csv(out / "detections.csv")
+    gap = (det["t"] >= 2.0) & (det["t"] < 16.0)  # no detection in window 2 (it reads 3-15 s)
+    det.loc[gap, "ok"] = 0
+    det.to_csv(out / "detections.csv", index=False, float_format="%.6f")
+    summary = pipeline.fuse(detected, out=out)
+    tab = pd.read_csv(out / "trajectory-arm-smoother.csv")
+    empty = (tab["t"] >= 6.0) & (tab["t"] < 16.0)  # window 2's rows, window 3's before 16 s
+    assert tab.loc[empty, "wrist_x"].isna().all()
+    assert np.isfinite(tab.loc[~empty, "wrist_x"]).all()
+    assert summary["frames"] == int((~empty).sum())
