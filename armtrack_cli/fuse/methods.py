@@ -266,11 +266,12 @@ def _per_axis(pos: float, vel: float) -> np.ndarray:
 
 
 def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
-        s: FuseSettings, arm: Arm | None, *, forward_done: Callable[[], object] | None = None
-        ) -> Estimates:
+        s: FuseSettings, arm: Arm | None, *, forward_done: Callable[[], object] | None = None,
+        summary_rows: slice | None = None) -> Estimates:
     """``forward_done``: called once the compiled forward pass (the particles') is done, before
     what follows it (the smoothers, whose memory peaks): work a caller runs beside that pass
-    ends there (pipeline/fuse.py: the IMU offset's check; issue 15)."""
+    ends there (pipeline/fuse.py: the IMU offset's check; issue 15). ``summary_rows``: the
+    arm smoother's summary's frames (a window's own: pipeline/fuse_windows.py); all if None."""
     if method in ("inertial", "ekf", "ukf"):
         est = run_gaussian(inp, x0, P0, proj, s, method)
     elif method == "pf":
@@ -293,7 +294,7 @@ def run(method: str, inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projecti
                             in_place=True).mean]  # over est's: no second (n, 6) array
             del est  # its (n, 6, 6) covariances, not held through the smoother (issue 15)
             inp.drop_steps()  # nor the model's steps (n, 7), where inp is fuse's, run once
-            return run_arm_smoother(inp, x0, P0, proj, s, arm, first)
+            return run_arm_smoother(inp, x0, P0, proj, s, arm, first, summary_rows)
     else:
         raise ValueError(f"unknown method {method!r}")
     if s.smoother == "rts":
@@ -338,32 +339,35 @@ def run_error_corrected(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Proje
 
 
 def run_arm_smoother(inp: Inputs, x0: np.ndarray, P0: np.ndarray, proj: Projection,
-                     s: FuseSettings, arm: Arm, first: np.ndarray | list) -> Estimates:
+                     s: FuseSettings, arm: Arm, first: np.ndarray | list,
+                     rows: slice | None = None) -> Estimates:
     """The orientation-aware arm smoother (fuse/arm_smoother.py) from the first pass ``first``
     (n_frames, 6) (or [it]: arm_smoother.run lets it go); its (p, v) block as every
-    method's, the rest in the summary."""
+    method's, the rest in the summary, over the frames ``rows`` (all by default)."""
     if inp.imu is None or inp.t is None:
         raise ValueError("arm-smoother needs the IMU samples and the frame times in its inputs")
     imu = [inp.take_imu()]  # arm_smoother.run's: freed once folded where inp lets them go
-    at_rest = (int(arm_smoother.resting(imu[0], inp.t, inp.z, s).sum())
+    rows = slice(None) if rows is None else rows
+    at_rest = (int(arm_smoother.resting(imu[0], inp.t, inp.z, s)[rows].sum())
                if s.rest_velocity_sd_m_s > 0 else None)
     r = arm_smoother.run(imu, inp.t, inp.z, inp.q_WB, first, x0, P0, proj, s, arm)
-    th = r.x[:, arm_smoother.TH]
-    summary = {"detections_gated": int(r.gated.sum()), "smoother_iterations_run": r.iterations,
-               "start_runs_moved": r.runs_moved,
-               "accel_bias_m_s2": [round(float(v), 4) for v in r.x[-1, arm_smoother.BA]],
+    x = r.x[rows]  # a view: the frames summarised
+    th = x[:, arm_smoother.TH]
+    summary = {"detections_gated": int(r.gated[rows].sum()),
+               "smoother_iterations_run": r.iterations, "start_runs_moved": r.runs_moved,
+               "accel_bias_m_s2": [round(float(v), 4) for v in x[-1, arm_smoother.BA]],
                "orientation_error_rms_deg": round(float(np.degrees(
                    np.sqrt(np.mean(np.sum(th**2, axis=1))))), 3)}
     if r.gyro:
         summary["gyro_bias_deg_s"] = [round(float(v), 4) for v in
-                                      np.degrees(r.x[-1, arm_smoother.BG])]
+                                      np.degrees(x[-1, arm_smoother.BG])]
     summary["orientation_error_model"] = "gyro" if r.gyro else "gauss-markov"
     if s.shoulder == "drifting":
-        sh = r.x[:, arm_state.shoulder_slice(r.x.shape[1])]
+        sh = x[:, arm_state.shoulder_slice(r.x.shape[1])]
         summary["shoulder_mean_m"] = [round(float(v), 4) for v in sh.mean(axis=0)]
         summary["shoulder_drift_max_m"] = round(float(np.linalg.norm(
             sh - arm.shoulder, axis=1).max()), 4)
-        ell = r.x[:, arm_state.drift_slice(r.x.shape[1]).start]
+        ell = x[:, arm_state.drift_slice(r.x.shape[1]).start]
         summary["upper_arm_change_m"] = [round(float(v), 4) for v in (ell.min(), ell.max())]
     if at_rest is not None:
         summary["frames_at_rest"] = at_rest

@@ -51,6 +51,7 @@ class Prepared:
     #                  error replaced by a constant one (fuse/gyro_orientation.py), for the
     #                  arm estimate ([arm] "auto"); None once that is done
     orientation: str = "file"  # the IMU's orientation_source: "file" or "estimated (…)"
+    offset_s: float | None = None  # the IMU's clock offset used (a windowed fuse's; s)
 
 
 def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False
@@ -147,6 +148,12 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
                           "use inertial, ekf, ukf or pf, or add the arm model")
     dest = out_dir(session, out)
     large_arrays_mapped()  # session-long arrays returned when freed, not kept in the heap
+    if _longer_than_a_window(session):  # a window at a time (pipeline/fuse_windows.py)
+        from armtrack_cli.pipeline.fuse_windows import fuse_windowed
+
+        done = fuse_windowed(session, dest, s, where)
+        if done is not None:  # else its frames are one window after all: run whole
+            return done
     p = prepare(session, dest, s, beside=True)  # the offset's check: started below
     auto = None
     if session.arm is not None and session.arm.auto:  # [arm] … = "auto": from the data first
@@ -211,8 +218,23 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
             "imu_offset_s": offset}
 
 
-def _timed_run(s: FuseSettings, p: Prepared, x0: np.ndarray, P0: np.ndarray
-               ) -> tuple[Any, float, float, dict]:
+def _longer_than_a_window(session: Session) -> bool:
+    """Whether the video is longer than one window and its margins (core/windows.py): a
+    shorter session runs whole, as before windows existed; one whose video cannot be read
+    too, so that prepare() says what is wrong as it always has."""
+    from armtrack_cli.core.windows import windows
+
+    try:
+        require(session, "imu")
+        require(session, "camera")
+        t = probe_video(session.camera.video).t
+    except Exception:  # noqa: BLE001 - prepare() raises it, with its order of checks
+        return False
+    return t.size > 1 and len(windows(float(t[0]), float(t[-1]))) > 1
+
+
+def _timed_run(s: FuseSettings, p: Prepared, x0: np.ndarray, P0: np.ndarray,
+               summary_rows: slice | None = None) -> tuple[Any, float, float, dict]:
     """The method run on p's inputs, timed: (estimates, seconds, cpu_seconds, how the IMU's
     offset was set). A declared offset's check runs beside the compiled forward pass (no GIL
     held) and is waited for when that pass ends, before the smoothers, whose memory peaks
@@ -231,7 +253,7 @@ def _timed_run(s: FuseSettings, p: Prepared, x0: np.ndarray, P0: np.ndarray
     try:  # a diverging filter's 0/0s not printed one by one: fuse refuses its result whole
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             est = run(s.method, p.inputs, x0, P0, p.projection, s, p.arm,
-                      forward_done=forward_done)
+                      forward_done=forward_done, summary_rows=summary_rows)
         elapsed, cpu = time.perf_counter() - start - sum(waited), time.thread_time() - cpu
     finally:  # the offset's check (and its warning) before any error of the filter's
         offset = check.result()
