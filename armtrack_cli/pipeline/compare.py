@@ -3,18 +3,22 @@
 from __future__ import annotations
 
 import warnings
+from contextlib import ExitStack
 from functools import partial
 from pathlib import Path
 from typing import Any
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
 from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_markers
+from armtrack_cli.compare.spilled import SpilledTable
 from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import ArmtrackError, DataError
 from armtrack_cli.core.methods import METHODS
+from armtrack_cli.core.spill import Spill
 from armtrack_cli.core.threads import Deferred, Done, Then
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
+from armtrack_cli.pipeline.compare_windows import bounded_offset, scored_windowed, session_windows
 from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
 from armtrack_cli.pipeline.kinematics import (
     WRIST_ANGLES,
@@ -160,6 +164,53 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth,
     return rows, mrows, excluded
 
 
+def _scored_whole(session: Session, work: WorkFolder, trajs: dict) -> tuple:
+    """errors.csv's rows, measures.csv's rows, the frames without truth and the offset's
+    settings of a session of one window, held whole."""
+    truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
+                                        beside=True)  # a declared offset's check beside
+    try:
+        rows, mrows, excluded = _scored(session, work, trajs, truth, None if isinstance(
+            pending, Done) else sync_joint(truth.xyz))  # the check beside reads that joint
+    finally:  # the check's estimate (and its warning) before any error of the scoring's
+        offset = pending.result()
+    return rows, mrows, excluded, offset
+
+
+def _trajectory_blocks(session: Session, path: Path):
+    """The columns compare reads of a trajectory table (_used), block by block."""
+    yield _used(session, trajectory_columns(path))
+
+
+def _truth_table(session: Session, spill: Spill) -> tuple[SpilledTable, float, tuple]:
+    """The truth on its own clock (offset 0) in ``spill``, its rate and its roles."""
+    raw = read_truth(session, offset_s=0.0)
+    roles, rate = tuple(raw.xyz), raw.rate_hz
+    return SpilledTable(spill, [{"t": raw.t, **raw.xyz}]), rate, roles
+
+
+def _offset_windowed(session: Session, tabs: dict, truth: SpilledTable, rate: float, eye
+                     ) -> tuple[float, dict]:
+    """synchronised_truth's offset and its settings for a session of several windows, from
+    a bounded span (compare_windows.sync_span): the declared one checked, or "auto"."""
+    gt = session.groundtruth
+    declared = session.sync.groundtruth_offset_s != "auto"
+    ref = next((m for m in SYNC_PREFERENCE if m in tabs), next(iter(tabs)))
+    joint = "wrist" if "wrist" in truth.names else next(
+        k for k in truth.names if k != "t")
+    centre = session.offset_s("groundtruth_offset_s") if declared else 0.0
+    off = bounded_offset(tabs[ref], truth, joint, rate, centre_s=centre, eye=eye,
+                         search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S)
+    if declared:
+        return centre, _judged(gt.file, centre, ref, 0.5 / rate, off)
+    if off is None:
+        raise DataError(gt.file, f"its clock offset cannot be estimated: within ±{AUTO_SEARCH_S:g}"
+                        f" s it never overlaps trajectory-{ref}.csv enough",
+                        "declare [sync] groundtruth_offset_s in seconds")
+    return off.estimate_s, {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4),
+                            "from": "auto", "estimated_with": ref}
+
+
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
             out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
@@ -172,14 +223,19 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    trajs = {m: _used(session, trajectory_columns(work / f"trajectory-{m}.csv")) for m in methods}
-    truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
-                                        beside=True)  # a declared offset's check beside
-    try:
-        rows, mrows, excluded = _scored(session, work, trajs, truth, None if isinstance(
-            pending, Done) else sync_joint(truth.xyz))  # the check beside reads that joint
-    finally:  # the check's estimate (and its warning) before any error of the scoring's
-        offset = pending.result()
+    with ExitStack() as spills:  # the spills' folders removed at the end, after a failure too
+        tabs = {m: SpilledTable(spills.enter_context(Spill(work.path)),
+                                _trajectory_blocks(session, work / f"trajectory-{m}.csv"))
+                for m in methods}
+        if any(len(session_windows(tab)) > 1 for tab in tabs.values()):
+            truth, rate, roles = _truth_table(session, spills.enter_context(Spill(work.path)))
+            off, offset = _offset_windowed(session, tabs, truth, rate, _camera_centre(work.path))
+            rows, mrows, excluded = scored_windowed(session, work, tabs, truth, roles, off, rate)
+        else:  # one window: the whole session at once, as before windows
+            trajs = {m: tab.rows(0, len(tab)) for m, tab in tabs.items()}
+            del tabs
+            spills.close()
+            rows, mrows, excluded, offset = _scored_whole(session, work, trajs)
     with output_set():
         write_rows(work / "errors.csv", rows, columns=COLUMNS, command="compare",
                    settings={"methods": list(methods), "excluded_frames": excluded,
