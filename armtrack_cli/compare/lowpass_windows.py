@@ -22,6 +22,7 @@ from armtrack_cli.core.butter import ZeroPhase
 from armtrack_cli.measures.signal import lowpass
 
 Rows = Callable[[int, int], np.ndarray]  # rows [lo, hi) of one joint's (n, 3) markers
+BATCH = 4  # grid cut-offs tried a pass over a long run (each pass transforms each window once)
 
 
 @dataclass(frozen=True)
@@ -61,29 +62,48 @@ def _grid(fs: float, max_hz: float) -> tuple[np.ndarray, list[float]]:
     return band, [float(f) for f in (*band, *grid, max_hz)]
 
 
+def _residuals(rows: Rows, a: int, b: int, fs: float, cutoffs: list[float], inner: int,
+               margin: int) -> np.ndarray:
+    """(len(cutoffs), 3) R(fc) of the run [a, b): each window's inner rows' squared residuals
+    (low-passed with its margins) summed, over the run's rows."""
+    ss = np.zeros((len(cutoffs), 3))
+    for lo, hi, ilo, ihi in _pieces(a, b, inner, margin):
+        x = rows(lo, hi)
+        ready = ZeroPhase(x.T, fs, cutoffs)
+        own = slice(ilo - lo, ihi - lo)
+        for k, fc in enumerate(cutoffs):
+            d = x[own] - ready.at(fc).T[own]
+            ss[k] += np.einsum("ij,ij->j", d, d)
+    return np.sqrt(ss / (b - a))
+
+
 def long_cutoffs(rows: Rows, a: int, b: int, fs: float, max_hz: float, inner: int,
                  margin: int) -> tuple[float, ...]:
     """The cut-off per coordinate winter_lowpass_into picks for the run [a, b), from its
-    residuals summed a window at a time."""
+    residuals summed a window at a time: the noise band's in one pass, then the grid's
+    rising, BATCH cut-offs a pass, until every coordinate has met its noise level."""
     nyq = fs / 2.0
     if b - a < 2 * fs or max_hz <= MIN_HZ or 0.3 * nyq <= max_hz:
         return (max_hz,) * 3
     band, cutoffs = _grid(fs, max_hz)
-    ss = np.zeros((len(cutoffs) - 1, 3))  # squared residuals at each cut-off tried
-    for lo, hi, ilo, ihi in _pieces(a, b, inner, margin):
-        x = rows(lo, hi)
-        ready = ZeroPhase(x.T, fs, cutoffs[:-1])
-        own = slice(ilo - lo, ihi - lo)
-        for k, fc in enumerate(cutoffs[:-1]):
-            d = x[own] - ready.at(fc).T[own]
-            ss[k] += np.einsum("ij,ij->j", d, d)
-    r = np.sqrt(ss / (b - a))
-    out = []
+    r_band = _residuals(rows, a, b, fs, list(band), inner, margin)
+    level = {}
     for j in range(3):
-        slope, level = np.polyfit(band, r[:len(band), j], 1)
-        met = [fc for fc, rk in zip(cutoffs[len(band):-1], r[len(band):, j])
-               if np.isfinite(level) and level > 0 and rk <= level]
-        out.append(met[0] if met else max_hz)
+        slope, a_j = np.polyfit(band, r_band[:, j], 1)
+        if np.isfinite(a_j) and a_j > 0:
+            level[j] = a_j
+    out = [max_hz] * 3
+    grid = cutoffs[len(band):-1]
+    for k in range(0, len(grid), BATCH):
+        if not level:
+            break
+        some = grid[k:k + BATCH]
+        r = _residuals(rows, a, b, fs, some, inner, margin)
+        for j in list(level):
+            met = [fc for fc, rk in zip(some, r[:, j]) if rk <= level[j]]
+            if met:
+                out[j] = met[0]
+                del level[j]
     return tuple(out)
 
 

@@ -19,7 +19,10 @@ from armtrack_cli.core.threads import Deferred, Done, Then
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
 from armtrack_cli.pipeline.compare_windows import bounded_offset, scored_windowed, session_windows
-from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
+from armtrack_cli.pipeline.groundtruth import (  # any lab's export (issue 16)
+    read_truth,
+    truth_stream,
+)
 from armtrack_cli.pipeline.kinematics import (
     WRIST_ANGLES,
     XYZ,
@@ -31,7 +34,12 @@ from armtrack_cli.pipeline.kinematics import (
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.outputs import output_set, write_rows
-from armtrack_cli.session.plain_tables import kinematics_rows, trajectory_columns
+from armtrack_cli.session.plain_tables import (
+    NotPlain,
+    kinematics_rows,
+    trajectory_blocks,
+    trajectory_columns,
+)
 from armtrack_cli.session.workfolder import WorkFolder
 
 BESIDE_MAX_SAMPLES = 120_000  # 20 minutes at 100 Hz (below)
@@ -117,13 +125,18 @@ def _joints(traj: dict) -> dict:
     return {j: columns(traj, [f"{j}_x", f"{j}_y", f"{j}_z"]) for j in JOINTS if f"{j}_x" in traj}
 
 
-def _used(session: Session, traj: dict) -> dict:
+def _keep(session: Session) -> set[str]:
     """The columns of a trajectory table that compare reads (its time, the joints' and named
     points' positions, the wrist's SDs and angles): a 60-minute table's velocities and other
     SDs are 8 MB it need not hold while it scores (issue 15)."""
     points = (*JOINTS, *session.groundtruth.markers)
-    keep = {"t", *(f"{p}_{a}" for p in points for a in XYZ), *(f"wrist_{a}_sd" for a in XYZ),
+    return {"t", *(f"{p}_{a}" for p in points for a in XYZ), *(f"wrist_{a}_sd" for a in XYZ),
             *WRIST_ANGLES, *(f"{a}_sd" for a in WRIST_ANGLES)}
+
+
+def _used(session: Session, traj: dict) -> dict:
+    """_keep's columns of a trajectory table."""
+    keep = _keep(session)
     return {k: v for k, v in traj.items() if k in keep}
 
 
@@ -177,16 +190,23 @@ def _scored_whole(session: Session, work: WorkFolder, trajs: dict) -> tuple:
     return rows, mrows, excluded, offset
 
 
-def _trajectory_blocks(session: Session, path: Path):
-    """The columns compare reads of a trajectory table (_used), block by block."""
-    yield _used(session, trajectory_columns(path))
+def _trajectory_table(session: Session, spills: ExitStack, path: Path) -> SpilledTable:
+    """_keep's columns of a trajectory table in a spill, streamed (plain_tables.
+    trajectory_blocks); a table the plain reader does not take read whole, as before."""
+    keep = _keep(session)
+    spill = spills.enter_context(Spill(path.parent))
+    try:
+        return SpilledTable(spill, trajectory_blocks(path, keep.__contains__))
+    except NotPlain:
+        spill.close()
+    return SpilledTable(spills.enter_context(Spill(path.parent)),
+                        [_used(session, trajectory_columns(path))])
 
 
 def _truth_table(session: Session, spill: Spill) -> tuple[SpilledTable, float, tuple]:
     """The truth on its own clock (offset 0) in ``spill``, its rate and its roles."""
-    raw = read_truth(session, offset_s=0.0)
-    roles, rate = tuple(raw.xyz), raw.rate_hz
-    return SpilledTable(spill, [{"t": raw.t, **raw.xyz}]), rate, roles
+    rate, roles, blocks = truth_stream(session)  # streamed where it can be (a QTM 3D export)
+    return SpilledTable(spill, blocks), rate, roles
 
 
 def _offset_windowed(session: Session, tabs: dict, truth: SpilledTable, rate: float, eye
@@ -224,8 +244,7 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
     with ExitStack() as spills:  # the spills' folders removed at the end, after a failure too
-        tabs = {m: SpilledTable(spills.enter_context(Spill(work.path)),
-                                _trajectory_blocks(session, work / f"trajectory-{m}.csv"))
+        tabs = {m: _trajectory_table(session, spills, work / f"trajectory-{m}.csv")
                 for m in methods}
         if any(len(session_windows(tab)) > 1 for tab in tabs.values()):
             truth, rate, roles = _truth_table(session, spills.enter_context(Spill(work.path)))
