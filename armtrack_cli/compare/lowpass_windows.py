@@ -133,6 +133,7 @@ def denoised_rows(rows: Rows, runs: list[Run], lo: int, hi: int, fs: float, max_
             continue
         ra, rb = max(r.a, a - margin), min(r.b, b + margin)
         piece = rows(ra, rb)
-        for j, fc in enumerate(r.cut):
-            out[a - first:b - first, j] = lowpass(piece[:, j:j + 1], fs, fc)[a - ra:b - ra, 0]
+        for fc in sorted(set(r.cut)):  # the coordinates of one cut-off filtered together
+            cols = [j for j, c in enumerate(r.cut) if c == fc]
+            out[a - first:b - first, cols] = lowpass(piece[:, cols], fs, fc)[a - ra:b - ra]
     return first, last, out
