@@ -57,7 +57,8 @@ def sync_joint(xyz: dict) -> str:
 
 def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool = False
                        ) -> tuple[Truth, Then | Done]:
-    """The truth on the session clock, and how its offset was set (its ``result()``: a dict):
+    """The truth on the session clock, and how its offset was set (its ``result()``: a dict),
+    for a session of one window (a longer one: _offset_windowed, on a bounded span):
     declared (and checked against the data: a disagreement beyond 3 SD is a one-line warning)
     or "auto" (estimated from the trajectory of the best method in ``trajs``, method ->
     trajectory table; with the camera's centre ``eye`` (3,) m in W, from the residual across
