@@ -134,3 +134,13 @@ def test_the_offset_span_is_one_window_at_the_middle(tmp_path):
         a, b = sync_span(tab)
         assert b - a == pytest.approx(win.WINDOW_S + 2 * win.MARGIN_S)
         assert (a + b) / 2 == pytest.approx((tab.first + tab.last) / 2)
+
+
+def test_the_offset_span_is_where_the_truth_is(tmp_path):
+    """A truth that covers the first 31 minutes of a 60-minute trajectory: the span is at the
+    middle of what it covers, not of the trajectory."""
+    with Spill(tmp_path) as sp:
+        tab = SpilledTable(sp, [{"t": np.arange(0.0, 3600.0, 1 / 30)}])
+        a, b = sync_span(tab, -5.0, 1860.0)
+        assert (a + b) / 2 == pytest.approx(930.0, abs=0.1) and b <= 1860.0
+        assert sync_span(tab, 4000.0, 5000.0) == sync_span(tab)  # they do not meet

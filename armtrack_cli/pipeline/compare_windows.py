@@ -5,7 +5,8 @@ grow with the session's length (the measures' inputs aside, pipeline/kinematics.
 
 - The clock offset (declared: its check; "auto": its estimate) from a bounded span: the
   window-and-margins (WINDOW_S + 2 MARGIN_S = 340 s) at the middle of the reference
-  trajectory, against the truth within the search's reach of it.
+  trajectory's frames that the truth covers (at the declared offset; "auto": at 0), against
+  the truth within the search's reach of it.
 - errors.csv: each window's errors on its inner frames (error_rows), pooled exactly
   (compare.errors.pooled: counts, sums, sums of squares, maxima); frames without truth
   counted across windows.
@@ -46,11 +47,16 @@ def session_windows(tab: SpilledTable) -> list[win.Window]:
     return win.windows(tab.first, tab.last, win.WINDOW_S, win.MARGIN_S)
 
 
-def sync_span(tab: SpilledTable) -> tuple[float, float]:
+def sync_span(tab: SpilledTable, lo: float = -np.inf, hi: float = np.inf
+              ) -> tuple[float, float]:
     """The span the offset is estimated on: one window and its margins at the middle of the
-    trajectory (the whole of a shorter one)."""
+    trajectory's frames within [lo, hi] (where the truth is, at the offset searched about;
+    the whole trajectory when they do not meet), the whole of a shorter one."""
+    a, b = max(tab.first, lo), min(tab.last, hi)
+    if not a < b:
+        a, b = tab.first, tab.last
     half = 0.5 * (win.WINDOW_S + 2 * win.MARGIN_S)
-    mid = 0.5 * (tab.first + tab.last)
+    mid = 0.5 * (a + b)
     return max(tab.first, mid - half), min(tab.last, mid + half)
 
 
@@ -58,7 +64,7 @@ def bounded_offset(tab: SpilledTable, truth: SpilledTable, joint: str, rate: flo
                    search_s: float, centre_s: float, eye=None):
     """compare.sync.estimate_offset on sync_span of the trajectory ``tab`` and the truth's
     ``joint`` (raw clock) within the search's reach of it; None as estimate_offset gives."""
-    start, stop = sync_span(tab)
+    start, stop = sync_span(tab, truth.first + centre_s, truth.last + centre_s)
     names = ("t", *(f"{joint}_{a}" for a in XYZ))
     if not all(n in tab.names for n in names):
         return None
