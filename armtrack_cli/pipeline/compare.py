@@ -3,19 +3,26 @@
 from __future__ import annotations
 
 import warnings
+from contextlib import ExitStack
 from functools import partial
 from pathlib import Path
 from typing import Any
 
 from armtrack_cli.compare.errors import COLUMNS, table_one
 from armtrack_cli.compare.score import JOINTS, Truth, denoised, score, truth_markers
+from armtrack_cli.compare.spilled import SpilledTable
 from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import ArmtrackError, DataError
 from armtrack_cli.core.methods import METHODS
+from armtrack_cli.core.spill import Spill
 from armtrack_cli.core.threads import Deferred, Done, Then
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
-from armtrack_cli.pipeline.groundtruth import read_truth  # any lab's export (issue 16)
+from armtrack_cli.pipeline.compare_windows import bounded_offset, scored_windowed, session_windows
+from armtrack_cli.pipeline.groundtruth import (  # any lab's export (issue 16)
+    read_truth,
+    truth_stream,
+)
 from armtrack_cli.pipeline.kinematics import (
     WRIST_ANGLES,
     XYZ,
@@ -27,7 +34,12 @@ from armtrack_cli.pipeline.kinematics import (
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session, load_session, require
 from armtrack_cli.session.outputs import output_set, write_rows
-from armtrack_cli.session.plain_tables import kinematics_rows, trajectory_columns
+from armtrack_cli.session.plain_tables import (
+    NotPlain,
+    kinematics_rows,
+    trajectory_blocks,
+    trajectory_columns,
+)
 from armtrack_cli.session.workfolder import WorkFolder
 
 BESIDE_MAX_SAMPLES = 120_000  # 20 minutes at 100 Hz (below)
@@ -45,7 +57,8 @@ def sync_joint(xyz: dict) -> str:
 
 def synchronised_truth(session: Session, trajs: dict, *, eye=None, beside: bool = False
                        ) -> tuple[Truth, Then | Done]:
-    """The truth on the session clock, and how its offset was set (its ``result()``: a dict):
+    """The truth on the session clock, and how its offset was set (its ``result()``: a dict),
+    for a session of one window (a longer one: _offset_windowed, on a bounded span):
     declared (and checked against the data: a disagreement beyond 3 SD is a one-line warning)
     or "auto" (estimated from the trajectory of the best method in ``trajs``, method ->
     trajectory table; with the camera's centre ``eye`` (3,) m in W, from the residual across
@@ -113,13 +126,18 @@ def _joints(traj: dict) -> dict:
     return {j: columns(traj, [f"{j}_x", f"{j}_y", f"{j}_z"]) for j in JOINTS if f"{j}_x" in traj}
 
 
-def _used(session: Session, traj: dict) -> dict:
+def _keep(session: Session) -> set[str]:
     """The columns of a trajectory table that compare reads (its time, the joints' and named
     points' positions, the wrist's SDs and angles): a 60-minute table's velocities and other
     SDs are 8 MB it need not hold while it scores (issue 15)."""
     points = (*JOINTS, *session.groundtruth.markers)
-    keep = {"t", *(f"{p}_{a}" for p in points for a in XYZ), *(f"wrist_{a}_sd" for a in XYZ),
+    return {"t", *(f"{p}_{a}" for p in points for a in XYZ), *(f"wrist_{a}_sd" for a in XYZ),
             *WRIST_ANGLES, *(f"{a}_sd" for a in WRIST_ANGLES)}
+
+
+def _used(session: Session, traj: dict) -> dict:
+    """_keep's columns of a trajectory table."""
+    keep = _keep(session)
     return {k: v for k, v in traj.items() if k in keep}
 
 
@@ -160,6 +178,60 @@ def _scored(session: Session, work: WorkFolder, trajs: dict, truth: Truth,
     return rows, mrows, excluded
 
 
+def _scored_whole(session: Session, work: WorkFolder, trajs: dict) -> tuple:
+    """errors.csv's rows, measures.csv's rows, the frames without truth and the offset's
+    settings of a session of one window, held whole."""
+    truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
+                                        beside=True)  # a declared offset's check beside
+    try:
+        rows, mrows, excluded = _scored(session, work, trajs, truth, None if isinstance(
+            pending, Done) else sync_joint(truth.xyz))  # the check beside reads that joint
+    finally:  # the check's estimate (and its warning) before any error of the scoring's
+        offset = pending.result()
+    return rows, mrows, excluded, offset
+
+
+def _trajectory_table(session: Session, spills: ExitStack, path: Path) -> SpilledTable:
+    """_keep's columns of a trajectory table in a spill, streamed (plain_tables.
+    trajectory_blocks); a table the plain reader does not take read whole, as before."""
+    keep = _keep(session)
+    spill = spills.enter_context(Spill(path.parent))
+    try:
+        return SpilledTable(spill, trajectory_blocks(path, keep.__contains__))
+    except NotPlain:
+        spill.close()
+    return SpilledTable(spills.enter_context(Spill(path.parent)),
+                        [_used(session, trajectory_columns(path))])
+
+
+def _truth_table(session: Session, spill: Spill) -> tuple[SpilledTable, float, tuple]:
+    """The truth on its own clock (offset 0) in ``spill``, its rate and its roles."""
+    rate, roles, blocks = truth_stream(session)  # streamed where it can be (a QTM 3D export)
+    return SpilledTable(spill, blocks), rate, roles
+
+
+def _offset_windowed(session: Session, tabs: dict, truth: SpilledTable, rate: float, eye
+                     ) -> tuple[float, dict]:
+    """synchronised_truth's offset and its settings for a session of several windows, from
+    a bounded span (compare_windows.sync_span): the declared one checked, or "auto"."""
+    gt = session.groundtruth
+    declared = session.sync.groundtruth_offset_s != "auto"
+    ref = next((m for m in SYNC_PREFERENCE if m in tabs), next(iter(tabs)))
+    joint = "wrist" if "wrist" in truth.names else next(
+        k for k in truth.names if k != "t")
+    centre = session.offset_s("groundtruth_offset_s") if declared else 0.0
+    off = bounded_offset(tabs[ref], truth, joint, rate, centre_s=centre, eye=eye,
+                         search_s=CHECK_SEARCH_S if declared else AUTO_SEARCH_S)
+    if declared:
+        return centre, _judged(gt.file, centre, ref, 0.5 / rate, off)
+    if off is None:
+        raise DataError(gt.file, f"its clock offset cannot be estimated: within ±{AUTO_SEARCH_S:g}"
+                        f" s it never overlaps trajectory-{ref}.csv enough",
+                        "declare [sync] groundtruth_offset_s in seconds")
+    return off.estimate_s, {"value": round(off.estimate_s, 4), "sd": round(off.sd_s, 4),
+                            "from": "auto", "estimated_with": ref}
+
+
 def compare(path: str | Path, *, methods: tuple[str, ...] = (),
             out: str | Path | None = None) -> dict[str, Any]:
     session = load_session(path)
@@ -172,14 +244,18 @@ def compare(path: str | Path, *, methods: tuple[str, ...] = (),
     methods = tuple(methods) or work.trajectories(METHODS)
     if not methods:
         raise DataError(work.path, "holds no trajectory-METHOD.csv", "run `armtrack fuse` first")
-    trajs = {m: _used(session, trajectory_columns(work / f"trajectory-{m}.csv")) for m in methods}
-    truth, pending = synchronised_truth(session, trajs, eye=_camera_centre(work.path),
-                                        beside=True)  # a declared offset's check beside
-    try:
-        rows, mrows, excluded = _scored(session, work, trajs, truth, None if isinstance(
-            pending, Done) else sync_joint(truth.xyz))  # the check beside reads that joint
-    finally:  # the check's estimate (and its warning) before any error of the scoring's
-        offset = pending.result()
+    with ExitStack() as spills:  # the spills' folders removed at the end, after a failure too
+        tabs = {m: _trajectory_table(session, spills, work / f"trajectory-{m}.csv")
+                for m in methods}
+        if any(len(session_windows(tab)) > 1 for tab in tabs.values()):
+            truth, rate, roles = _truth_table(session, spills.enter_context(Spill(work.path)))
+            off, offset = _offset_windowed(session, tabs, truth, rate, _camera_centre(work.path))
+            rows, mrows, excluded = scored_windowed(session, work, tabs, truth, roles, off, rate)
+        else:  # one window: the whole session at once, as before windows
+            trajs = {m: tab.rows(0, len(tab)) for m, tab in tabs.items()}
+            del tabs
+            spills.close()
+            rows, mrows, excluded, offset = _scored_whole(session, work, trajs)
     with output_set():
         write_rows(work / "errors.csv", rows, columns=COLUMNS, command="compare",
                    settings={"methods": list(methods), "excluded_frames": excluded,

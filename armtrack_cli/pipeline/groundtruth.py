@@ -8,6 +8,7 @@ for it (Nexus exports the unworn landmarks as empty columns).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -141,6 +142,72 @@ def read_truth(session: Session, *, offset_s: float | None = None) -> Truth:
     del traj  # the file's table freed once the last point taken from it is in W (issue 15)
     return Truth(t, {j: to_world(pts.pop(j), gt.to_world) for j in list(pts)},
                  rate)  # every named point: joints, or a palm session's markers
+
+
+def truth_stream(session: Session) -> tuple[float, tuple[str, ...], Iterator[dict]]:
+    """(rate, roles, blocks): read_truth(session, offset_s=0)'s clock and points a chunk at a
+    time, each block {"t": (n,), role: (n, 3) m in W}, for compare to spill (issue 15). A QTM
+    3D export whose points are its own markers is streamed (session/qualisys_stream.py; its
+    "never seen" errors raised once it is read, in read_truth's order); any other file (C3D,
+    Vicon, QTM 6DOF, clusters carrying landmarks, a name the file lacks) is read whole by
+    read_truth and handed over as one block: its peak grows with the capture as before."""
+    exprs = _streamable(session)
+    if exprs is None:
+        truth = read_truth(session, offset_s=0.0)
+        return truth.rate_hz, tuple(truth.xyz), iter([{"t": truth.t, **truth.xyz}])
+    names, rate, chunks = exprs[0]
+    return rate, tuple(exprs[1]), _stream_blocks(session, names, chunks, exprs[1])
+
+
+def _streamable(session: Session):
+    """((names, rate, chunks), role -> its markers) when the truth can be streamed, else None."""
+    from armtrack_cli.core.limits import MAX_TEXT_BYTES
+    from armtrack_cli.session import c3d, qtm6dof, vicon
+    from armtrack_cli.session.files import regular_file
+    from armtrack_cli.session.groundtruth import FORMATS
+    from armtrack_cli.session.qualisys import _header
+    from armtrack_cli.session.qualisys_stream import qualisys_chunks
+    from armtrack_cli.session.text_head import read_text_head
+
+    gt = session.groundtruth
+    regular_file(gt.file, GroundTruthError, f"a ground-truth file ({FORMATS})",
+                 hint="check [groundtruth] file in session.toml", max_bytes=MAX_TEXT_BYTES)
+    if gt.static is not None or gt.clusters or c3d.is_c3d(gt.file):
+        return None
+    lines = read_text_head(gt.file, GroundTruthError, f"a ground-truth file ({FORMATS})")
+    if vicon.looks_like_vicon(lines) or qtm6dof.is_6dof(_header(gt.file, lines)[0]):
+        return None
+    markers = {role: point_markers(expr) for role, expr in gt.markers.items()}
+    names, rate, chunks = qualisys_chunks(gt.file)
+    if any(n not in names for ns in markers.values() for n in ns or (None,)):
+        return None  # read_truth names what is missing, after its own checks
+    return (names, rate, chunks), markers
+
+
+def _stream_blocks(session: Session, names: tuple[str, ...], chunks, markers: dict
+                   ) -> Iterator[dict]:
+    gt = session.groundtruth
+    seen, whole = dict.fromkeys(names, False), dict.fromkeys(markers, False)
+    for t, xyz in chunks:
+        block = {"t": t}
+        for role, ns in markers.items():
+            tracks = [xyz[:, names.index(n), :] for n in ns]
+            for n, track in zip(ns, tracks):
+                seen[n] = seen[n] or bool(np.isfinite(track).all(axis=1).any())
+            point = tracks[0] if len(tracks) == 1 else np.mean(tracks, axis=0)
+            whole[role] = whole[role] or bool(np.isfinite(point).all(axis=1).any())
+            block[role] = to_world(point, gt.to_world)
+        yield block
+    for role, ns in markers.items():  # joint_points' checks, in its order
+        for n in ns:
+            if not seen[n]:
+                raise GroundTruthError(gt.file, f"marker {n!r} is never seen: every frame is a "
+                                       "gap", "check the marker labels in the capture software")
+        if not whole[role]:
+            raise GroundTruthError(gt.file, f"marker {gt.markers[role]!r} ({role}) is never "
+                                   "seen: every frame is a gap", "check the marker labels in "
+                                   "the capture software (and [groundtruth] clusters for "
+                                   "landmarks)")
 
 
 def read_hand_angles(session: Session) -> tuple[np.ndarray, np.ndarray] | None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,7 @@ import numpy as np
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.limits import MAX_TEXT_BYTES
 from armtrack_cli.session.files import regular_file
-from armtrack_cli.session.numeric_text import Irregular, Layout, file_rows
+from armtrack_cli.session.numeric_text import Irregular, Layout, file_chunks, file_rows, row_blocks
 
 TRAJECTORY_NEEDS = ("t", "wrist_x", "wrist_y", "wrist_z")
 KINEMATICS_NEEDS = ("measure", "segment", "value", "sd", "unit")
@@ -28,6 +29,11 @@ MAX_POSITION_M = 100.0  # as session/tables.py: farther from the board is not a 
 
 class _Irregular(Exception):
     """The file is not the plain form: the pandas reader decides."""
+
+
+class NotPlain(Exception):
+    """trajectory_blocks met what the plain reader does not take: read it with
+    trajectory_columns (which hands it to the pandas reader)."""
 
 
 def _text(path: Path, hint: str, *, quotes: bool = False) -> str:
@@ -54,6 +60,33 @@ def trajectory_columns(path: Path) -> dict[str, np.ndarray]:
         return {str(c): df[c].to_numpy(dtype=float) for c in df.columns}
 
 
+def trajectory_blocks(path: Path, keep) -> Iterator[dict[str, np.ndarray]]:
+    """The columns of trajectory-METHOD.csv that ``keep`` (a column name -> bool) takes, block
+    by block (a chunk of numeric_text's at a time), with the checks trajectory_columns makes
+    on every column: the same values (issue 15: a 60-minute table's 30 columns were 26 MB
+    read whole). Raises NotPlain, possibly after some blocks, where trajectory_columns would
+    hand the file to the pandas reader."""
+    path = Path(path)
+    try:
+        names = _plain_header(path, TRAJECTORY_NEEDS, "run `armtrack fuse SESSION --method M` first")
+        pos = [k for k, n in enumerate(names) if n.split("_")[0] in ("wrist", "elbow", "shoulder")
+               and n.rsplit("_", 1)[-1] in ("x", "y", "z") and "_v" not in n]
+        kept = [k for k, n in enumerate(names) if keep(n)]
+        layout = Layout(len(names), ",", tuple(names))
+        last = -np.inf
+        for rows in row_blocks(file_chunks(path, 1), layout, path, DataError, by_row=False,
+                               groups=(tuple(range(len(names))),)):
+            values = rows.groups[0]
+            t = values[:, names.index("t")]
+            if (np.isinf(values).any() or np.isnan(t).any() or (np.diff(np.r_[last, t]) <= 0).any()
+                    or (np.abs(np.nan_to_num(values[:, pos])) > MAX_POSITION_M).any()):
+                raise _Irregular
+            last = t[-1]
+            yield {names[k]: np.ascontiguousarray(values[:, k]) for k in kept}
+    except (_Irregular, Irregular):
+        raise NotPlain from None
+
+
 def plain_columns(path: Path, needs: tuple[str, ...], hint: str) -> dict[str, np.ndarray] | None:
     """A CSV table armtrack wrote, as column -> (N,) float64 (empty cells NaN), streamed by
     session/numeric_text, when it is in the plain form (a header naming ``needs``, plain
@@ -65,7 +98,8 @@ def plain_columns(path: Path, needs: tuple[str, ...], hint: str) -> dict[str, np
         return None
 
 
-def _plain_columns(path: Path, needs: tuple[str, ...], hint: str) -> dict[str, np.ndarray]:
+def _plain_header(path: Path, needs: tuple[str, ...], hint: str) -> list[str]:
+    """The column names of a plain table (checked as a file first), else _Irregular."""
     regular_file(path, DataError, "a CSV table", hint=hint, max_bytes=MAX_TEXT_BYTES)
     with open(path, "rb") as f:
         head = f.readline()
@@ -76,6 +110,11 @@ def _plain_columns(path: Path, needs: tuple[str, ...], hint: str) -> dict[str, n
     if (len(set(names)) != len(names) or any(n != n.strip() or not n or '"' in n for n in names)
             or not set(needs) <= set(names)):
         raise _Irregular
+    return names
+
+
+def _plain_columns(path: Path, needs: tuple[str, ...], hint: str) -> dict[str, np.ndarray]:
+    names = _plain_header(path, needs, hint)
     try:
         values = file_rows(path, 1, Layout(len(names), ",", tuple(names)), DataError,
                            by_row=False).data

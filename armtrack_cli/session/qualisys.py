@@ -37,8 +37,10 @@ def _header(path: Path, lines: list[str]) -> tuple[dict[str, list[str]], int]:
     return keys, at
 
 
-def read_qualisys(path: str | Path) -> MarkerTrajectories:
-    path = Path(path)
+def qualisys_head(path: Path) -> tuple[list[str], dict[str, list[str]], int, tuple[str, ...],
+                                       float]:
+    """(the file's head lines, its header keys, the table's first line, the marker names, the
+    frame rate): a QTM 3D export's header, checked."""
     lines = read_text_head(path, GroundTruthError, "a Qualisys TSV export")  # the rest streamed
     keys, at = _header(path, lines)
     if "NO_OF_BODIES" in keys or "BODY_NAMES" in keys or keys.get("DATA_INCLUDED", [""])[0] == "6D":
@@ -63,6 +65,12 @@ def read_qualisys(path: str | Path) -> MarkerTrajectories:
                                "a QTM export states its frame rate in Hz")
     if at >= len(lines):
         raise GroundTruthError(path, "has a header but no data (truncated export?)")
+    return lines, keys, at, names, freq
+
+
+def read_qualisys(path: str | Path) -> MarkerTrajectories:
+    path = Path(path)
+    lines, keys, at, names, freq = qualisys_head(path)
     m = len(names)
     has_row = _names_row(lines[at])
 
