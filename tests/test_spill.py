@@ -1,4 +1,4 @@
-"""core/spill.py: columns appended a block at a time read back exactly, by any row range,
+"""session/spill.py: columns appended a block at a time read back exactly, by any row range,
 and nothing left on disk once closed (also after a failure)."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armtrack_cli.core.spill import Spill
+from armtrack_cli.session.spill import Spill
 
 
 def test_blocks_read_back_exactly_by_any_range(tmp_path):

@@ -1,4 +1,4 @@
-"""A time-ordered table kept in a core/spill.Spill, read back by time span without holding its
+"""A time-ordered table kept in a session/spill.Spill, read back by time span without holding its
 clock (issue 15): compare's truth (360,200 rows at 60 minutes) and trajectories live on disk and
 a window's rows are read as it is scored. Only every STEP-th time is held (a 60-minute capture:
 88 values), so what compare holds does not grow with the session's length."""
@@ -9,16 +9,15 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from armtrack_cli.core.spill import Spill
-
 STEP = 4096  # rows between the times held: a search reads one block of this many times
 
 
 class SpilledTable:
     """Rows appended block by block (each a dict of columns, "t" time-ordered), then searched
-    by time and read by row range."""
+    by time and read by row range. ``spill`` is a session/spill.Spill the caller opened (its
+    append, read and len; the file access stays in the I/O layer)."""
 
-    def __init__(self, spill: Spill, blocks: Iterable[dict[str, np.ndarray]]):
+    def __init__(self, spill, blocks: Iterable[dict[str, np.ndarray]]):
         self.spill = spill
         marks, self.names = [], ()
         for block in blocks:

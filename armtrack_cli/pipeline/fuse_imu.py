@@ -53,12 +53,12 @@ STRIDE = 1024  # every STRIDE-th sample's time kept in memory: a span's rows fou
 
 
 class SpilledImu:
-    """The usable samples kept on disk (core/spill.py, in the output folder) as they are read
+    """The usable samples kept on disk (session/spill.py, in the output folder) as they are read
     a chunk at a time, read back by span: memory a window's samples, whatever the length."""
 
     def __init__(self, folder, chunks, *, rate_hz: float, orientation_source: str,
                  path: str) -> None:
-        from armtrack_cli.core.spill import Spill
+        from armtrack_cli.session.spill import Spill
 
         self.rate_hz, self.orientation_source, self.path = rate_hz, orientation_source, path
         self._spill = Spill(folder)

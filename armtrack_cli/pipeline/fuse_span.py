@@ -12,7 +12,7 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import DataError
-from armtrack_cli.core.spill import Spill
+from armtrack_cli.session.spill import Spill
 from armtrack_cli.core.windows import MARGIN_S, WINDOW_S, Window, windows
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.arm_smoother import ImuSamples

@@ -1,7 +1,7 @@
 """`armtrack fuse` on a session longer than one window (core/windows.py; issue 15): each
 window's frames run by the method on that window's inputs alone, started from its first
 detection as a whole session is from its first, its inner frames kept; the trajectory
-written a window at a time, the measures' columns kept on disk (core/spill.py) and measured
+written a window at a time, the measures' columns kept on disk (session/spill.py) and measured
 from there. Peak memory: one window's, whatever the session's length. docs/fusion.md,
 "Long sessions", says what differs from one run over the whole session and by how much."""
 
@@ -18,7 +18,7 @@ import numpy as np
 
 from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
-from armtrack_cli.core.spill import Spill
+from armtrack_cli.session.spill import Spill
 from armtrack_cli.core.threads import Done
 from armtrack_cli.core.windows import Window
 from armtrack_cli.fuse import camera_pose, models
