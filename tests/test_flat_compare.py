@@ -17,8 +17,8 @@ from armtrack_cli.compare.lowpass_windows import denoised_rows, plan
 from armtrack_cli.compare.score import Truth, denoised
 from armtrack_cli.compare.spilled import SpilledTable
 from armtrack_cli.core import windows as win
-from armtrack_cli.session.spill import Spill
 from armtrack_cli.pipeline.compare_windows import sync_span
+from armtrack_cli.session.spill import Spill
 
 from .conftest import REPO
 

@@ -14,7 +14,6 @@ from armtrack_cli.compare.spilled import SpilledTable
 from armtrack_cli.compare.sync import estimate_offset
 from armtrack_cli.core.errors import ArmtrackError, DataError
 from armtrack_cli.core.methods import METHODS
-from armtrack_cli.session.spill import Spill
 from armtrack_cli.core.threads import Deferred, Done, Then
 from armtrack_cli.measures.base import DEFAULT
 from armtrack_cli.pipeline.common import out_dir
@@ -40,6 +39,7 @@ from armtrack_cli.session.plain_tables import (
     trajectory_blocks,
     trajectory_columns,
 )
+from armtrack_cli.session.spill import Spill
 from armtrack_cli.session.workfolder import WorkFolder
 
 BESIDE_MAX_SAMPLES = 120_000  # 20 minutes at 100 Hz (below)

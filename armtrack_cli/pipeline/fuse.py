@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -13,7 +12,7 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import ConfigError, DataError
-from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
+from armtrack_cli.core.limits import REACH_MARGIN_M
 from armtrack_cli.core.methods import NEEDS, PALM_METHODS
 from armtrack_cli.fuse import camera_pose, models, robust
 from armtrack_cli.fuse.arm_smoother import ImuSamples
@@ -21,6 +20,7 @@ from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.kernel_setup import load_kernels
 from armtrack_cli.fuse.methods import Inputs, run
 from armtrack_cli.fuse.settings import FuseSettings
+from armtrack_cli.pipeline import fuse_checks as checks
 from armtrack_cli.pipeline.common import (
     large_arrays_mapped,
     out_dir,
@@ -176,26 +176,19 @@ def fuse(path: str | Path, *, method: str | None = None, particles: int | None =
     setup = time.perf_counter() - start
     est, elapsed, cpu, offset = _timed_run(s, p, x0, P0)
     release_memory()  # the method's working arrays, before the trajectory and its measures
-    from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
+    from armtrack_cli.fuse.trajectory import blank, trajectory_table
 
     table = trajectory_table(p.t_frames, p.frames, est, inp, p.arm)
     name = f"trajectory-{s.method}.csv"
     if not np.isfinite(est.mean).all():
         k = int(np.flatnonzero(~np.isfinite(est.mean).all(axis=1))[0])
-        raise DataError(dest / name, f"{s.method} diverged: its estimate is not finite from "
-                        f"t = {p.t_frames[p.frames[k]]:.3f} s; nothing was written",
-                        ("check [arm] (shoulder_m, upper_arm_m, forearm_m), " if p.arm else "")
-                        + "check the detections and the IMU, or try another method")
-    far = impossible_rows(table, shoulder=p.arm.shoulder if p.arm else None,
-                          reach_m=p.arm.L1 + p.arm.L2 + REACH_MARGIN_M if p.arm else None,
-                          bound_m=MAX_OBJECT_RANGE_M)
+        raise checks.diverged(dest / name, s.method, p.t_frames[p.frames[k]], p.arm)
+    far = checks.beyond_reach(table, p.arm)
     if far.all() or not np.isfinite(table["wrist_x"][~far]).any():
-        raise DataError(dest / name, f"{s.method} left the arm's reach in every frame; nothing "
-                        "was written", "check [arm], [sync] and the detections")
+        raise checks.nowhere_in_reach(dest / name, s.method)
     if far.any():
         table = blank(table, far)
-        warnings.warn(f"{dest / name}: {far.sum()} of {len(far)} frames put the wrist where no "
-                      f"wrist can be ({s.method} drifted); they are left empty", stacklevel=1)
+        checks.warn_blanked(dest / name, s.method, int(far.sum()), len(far))
     guards = detection_counts(est.codes)
     settings = {"recipe": where, **dataclasses.asdict(s), "initialised_from": how,
                 "frames_beyond_reach": int(far.sum()), **guards, **(est.summary or {}),

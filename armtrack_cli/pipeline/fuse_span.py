@@ -12,13 +12,13 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import DataError
-from armtrack_cli.session.spill import Spill
 from armtrack_cli.core.windows import MARGIN_S, WINDOW_S, Window, windows
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.arm_smoother import ImuSamples
 from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.methods import Inputs
 from armtrack_cli.pipeline.imu_offset import AUTO_SEARCH_S, resolve_imu_offset
+from armtrack_cli.session.spill import Spill
 
 PAD_S = 1.0  # IMU samples read beyond a window's last frame (and before its first, at least
 #              the arm smoother's pre_roll_s): the IMU held over its first and last steps

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -17,15 +16,14 @@ from typing import Any
 import numpy as np
 
 from armtrack_cli.core.errors import DataError
-from armtrack_cli.core.limits import MAX_OBJECT_RANGE_M, REACH_MARGIN_M
-from armtrack_cli.session.spill import Spill
 from armtrack_cli.core.threads import Done
 from armtrack_cli.core.windows import Window
 from armtrack_cli.fuse import camera_pose, models
 from armtrack_cli.fuse.estimates import Estimates
 from armtrack_cli.fuse.gyro_orientation import gyro_anchored
 from armtrack_cli.fuse.kernel_setup import load_kernels
-from armtrack_cli.fuse.trajectory import blank, impossible_rows, trajectory_table
+from armtrack_cli.fuse.trajectory import blank, trajectory_table
+from armtrack_cli.pipeline import fuse_checks as checks
 from armtrack_cli.pipeline import fuse_span
 from armtrack_cli.pipeline.common import release_memory
 from armtrack_cli.pipeline.fuse import (
@@ -37,6 +35,7 @@ from armtrack_cli.pipeline.fuse import (
 from armtrack_cli.pipeline.fuse_summary import combined
 from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session
+from armtrack_cli.session.spill import Spill
 
 MEASURED = ("t", "wrist_x", "wrist_y", "wrist_z", "elbow_x", "elbow_y", "elbow_z",
             "wrist_x_sd", "wrist_y_sd", "wrist_z_sd")  # what kinematics reads of a row
@@ -202,20 +201,13 @@ class _Run:
             yield block
             release_memory()
         if self.far == self.rows or not self.kept:
-            raise DataError(self.src.dest / self.name, f"{self.s.method} left the arm's reach "
-                            "in every frame; nothing was written",
-                            "check [arm], [sync] and the detections")
+            raise checks.nowhere_in_reach(self.src.dest / self.name, self.s.method)
         if self.far:
-            warnings.warn(f"{self.src.dest / self.name}: {self.far} of {self.rows} frames put "
-                          f"the wrist where no wrist can be ({self.s.method} drifted); they "
-                          "are left empty", stacklevel=1)
+            checks.warn_blanked(self.src.dest / self.name, self.s.method, self.far, self.rows)
 
     def _reach(self, block: dict) -> np.ndarray:
-        """impossible_rows of a block, counted toward the session's."""
-        arm = self.arm
-        far = impossible_rows(block, shoulder=arm.shoulder if arm else None,
-                              reach_m=arm.L1 + arm.L2 + REACH_MARGIN_M if arm else None,
-                              bound_m=MAX_OBJECT_RANGE_M)
+        """fuse_checks.beyond_reach of a block, counted toward the session's."""
+        far = checks.beyond_reach(block, self.arm)
         self.far += int(far.sum())
         self.rows += far.size
         self.kept += int(np.isfinite(block["wrist_x"][~far]).any())
@@ -246,11 +238,7 @@ class _Run:
         bad = ~np.isfinite(est.mean).all(axis=1)
         if bad.any():
             t_bad = t_f[fr[a + int(np.flatnonzero(bad)[0])]]
-            raise DataError(self.src.dest / self.name, f"{self.s.method} diverged: its "
-                            f"estimate is not finite from t = {t_bad:.3f} s; "
-                            "nothing was written",
-                            ("check [arm] (shoulder_m, upper_arm_m, forearm_m), " if self.arm
-                             else "") + "check the detections and the IMU, or try another method")
+            raise checks.diverged(self.src.dest / self.name, self.s.method, t_bad, self.arm)
         self.parts.append(({**detection_counts(est.codes), **(est.summary or {})}, b - a))
         self.n += b - a
         self.used += int(np.isfinite(inp.z[a:b]).all(axis=1).sum())
