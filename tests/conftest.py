@@ -32,3 +32,17 @@ def write_session(folder: Path, toml: str, files: dict[str, bytes | str] | None 
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_bytes(content if isinstance(content, bytes) else content.encode())
     return folder
+
+
+def detected_sample(tmp_path_factory, name: str = "circle-01") -> Path:
+    """A copy of a bundled sample session (without its armtrack/ outputs), calibrated and
+    detected, in a fresh tmp folder: for module fixtures of tests that fuse it."""
+    import shutil
+
+    from armtrack_cli import pipeline
+
+    folder = tmp_path_factory.mktemp("detected") / name
+    shutil.copytree(REPO / "sample_sessions" / name, folder,
+                    ignore=shutil.ignore_patterns("armtrack"))
+    pipeline.run(folder, through="detect")
+    return folder

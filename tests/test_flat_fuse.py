@@ -22,8 +22,9 @@ from armtrack_cli.pipeline import fuse_span, fuse_windows
 from armtrack_cli.pipeline.fuse_imu import ArrayImu, SpilledImu, chunks_of
 from armtrack_cli.pipeline.fuse_summary import combined
 
+from .conftest import detected_sample
+
 fuse_stage = importlib.import_module("armtrack_cli.pipeline.fuse")
-SAMPLE = Path(__file__).resolve().parents[1] / "sample_sessions" / "circle-01"
 SHORT = (6.0, 3.0)  # inner span and margin, s: circle-01 (20 s) becomes three windows
 POS_TOL_M = 0.005  # |windowed − whole| wrist and elbow: measured 0.0015 m at most here
 #                   (3 s margins; at the default 20 s, 0.0002 m on the 10- and 60-minute
@@ -32,10 +33,7 @@ POS_TOL_M = 0.005  # |windowed − whole| wrist and elbow: measured 0.0015 m at 
 
 @pytest.fixture(scope="module")
 def detected(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("flat") / "circle-01"
-    shutil.copytree(SAMPLE, folder, ignore=shutil.ignore_patterns("armtrack"))
-    pipeline.run(folder, through="detect")
-    return folder
+    return detected_sample(tmp_path_factory)
 
 
 def _short_windows(monkeypatch) -> None:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import gc
 import importlib
-import shutil
 import weakref
 from pathlib import Path
 
@@ -16,10 +15,11 @@ import pytest
 from armtrack_cli import pipeline
 from armtrack_cli.fuse import arm_smoother, methods
 
+from .conftest import detected_sample
+
 fuse_stage = importlib.import_module("armtrack_cli.pipeline.fuse")  # the module (pipeline.fuse
 #                                                                    is the stage's function)
 
-SAMPLE = Path(__file__).resolve().parents[1] / "sample_sessions" / "circle-01"
 
 
 def _root(a: np.ndarray) -> np.ndarray:
@@ -31,10 +31,7 @@ def _root(a: np.ndarray) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def detected(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("memory") / "circle-01"
-    shutil.copytree(SAMPLE, folder, ignore=shutil.ignore_patterns("armtrack"))
-    pipeline.run(folder, through="detect")
-    return folder
+    return detected_sample(tmp_path_factory)
 
 
 def test_the_smoother_runs_without_the_imu_samples_first_pass_or_start(detected, monkeypatch):
