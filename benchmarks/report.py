@@ -200,10 +200,10 @@ def _end_to_end(minutes: float, rows, method: str, run=None) -> list[str]:
                  if not err else f"| {name} | failed: {err} | | | | {load:.1f} |")
     L.append(f"| calibrate → compare (the stages above, summed) | {total:.1f} | "
              f"{total / ref:.2f} | 100 % | {peak:.0f} | |")
+    timed = (f"goal ≤ 15 s and ≤ 1.5×: {_met(total / ref <= 1.5 and total <= 15)}"
+             if minutes == 10 else "the time goal is the 10-minute session's")
     L += ["", f"calibrate → compare: {total:.1f} s, {total / ref:.2f}× decoding the video "
-          f"once (goal ≤ 15 s for 10 minutes and ≤ 1.5×: "
-          f"{_met(total / ref <= 1.5 and (minutes != 10 or total <= 15))}); peak memory "
-          f"{peak:.0f} MB (goal ≤ 300 MB: {_met(peak <= 300)})."]
+          f"once ({timed}); peak memory {peak:.0f} MB (goal ≤ 300 MB: {_met(peak <= 300)})."]
     if run is None:
         return L
     name, sec, mb, err, load = run
@@ -213,9 +213,10 @@ def _end_to_end(minutes: float, rows, method: str, run=None) -> list[str]:
                 "work folder: each library imported once, every stage run):", "",
                 "| what | seconds | × decode-only | peak memory (MB) | load | goal | |",
                 "|---|---|---|---|---|---|---|",
-                f"| {name} | {sec:.1f} | {sec / ref:.2f} | {mb:.0f} | {load:.1f} | ≤ 1.5× decode"
-                f"-only{', ≤ 15 s' if minutes == 10 else ''}, ≤ 300 MB | "
-                f"{_met(sec / ref <= 1.5 and (minutes != 10 or sec <= 15) and mb <= 300)} |"]
+                f"| {name} | {sec:.1f} | {sec / ref:.2f} | {mb:.0f} | {load:.1f} | "
+                + (f"≤ 1.5× decode-only, ≤ 15 s, ≤ 300 MB | "
+                   f"{_met(sec / ref <= 1.5 and sec <= 15 and mb <= 300)} |" if minutes == 10
+                   else f"≤ 300 MB (time: the 10-minute session's goal) | {_met(mb <= 300)} |")]
 
 
 def _with_length(e2e: dict, run: dict) -> list[str]:
@@ -246,6 +247,30 @@ def _with_length(e2e: dict, run: dict) -> list[str]:
     return L
 
 
+FLAT_NOISE = 1.02  # VmHWM of the same run repeated varies by 1-2 % (allocator, threads)
+
+
+def _flat(peaks: dict, run: dict) -> list[str]:
+    """Issue 15's "flat: a 60-minute session peaks no higher" than the 10-minute one (both
+    a window at a time; within FLAT_NOISE), each stage's worst and `armtrack run`'s; the
+    1-minute session (one window, smaller than a window's data) and the growth per hour
+    beside it."""
+    mins = sorted(peaks)
+    ref = 10 if 10 in peaks else mins[0]
+    L = []
+    for what, pk in (("Peak memory of the stages", peaks), ("`armtrack run` as one process",
+                                                             run)):
+        if ref not in pk or max(mins) not in pk or len(pk) < 2:
+            continue
+        hi = max(mins)
+        per_h = (pk[hi] - pk[ref]) / (hi - ref) * 60 if hi > ref else float("nan")
+        L += ["", f"{what}: " + ", ".join(f"{pk[m]:.0f} MB at {m:g} min" for m in sorted(pk))
+              + f"; {per_h:+.0f} MB per hour beyond {ref:g} minutes (goal: flat, the "
+              f"{hi:g}-minute session no higher than the {ref:g}-minute one within "
+              f"{(FLAT_NOISE - 1) * 100:.0f} %: {_met(pk[hi] <= pk[ref] * FLAT_NOISE)})."]
+    return L
+
+
 def _memory(res) -> list[str]:
     """Peaks of the end-to-end runs side by side (flat: the longest no higher), and the
     import floor that bounds them."""
@@ -254,13 +279,7 @@ def _memory(res) -> list[str]:
     run = res.get("run", {})
     if len(peaks) > 1:
         L += _with_length(res["e2e"], run)
-        lo, hi = min(peaks), max(peaks)
-        L += ["", f"Peak memory with session length: {peaks[lo]:.0f} MB at {lo:g} minutes, "
-              f"{peaks[hi]:.0f} MB at {hi:g} (goal: flat, the longer no higher: "
-              f"{_met(peaks[hi] <= peaks[lo] * 1.05)})."]
-        if lo in run and hi in run and not (run[lo][3] or run[hi][3]):
-            L += [f"`armtrack run` as one process: {run[lo][2]:.0f} MB at {lo:g} minutes, "
-                  f"{run[hi][2]:.0f} MB at {hi:g} ({_met(run[hi][2] <= run[lo][2] * 1.05)})."]
+        L += _flat(peaks, {m: r[2] for m, r in run.items() if not r[3]})
     L += ["", "### What a process holds after its imports alone (peak resident MB, a fresh "
           "process each)", "", "| imports | MB |", "|---|---|"]
     L += [f"| `{what}` | {mb:.0f} |" for what, mb in res["floor"]]
