@@ -240,3 +240,44 @@ def test_several_sessions_of_one_subject_give_a_progress_report(arm, tmp_path):
     r = run_cli("report", later, s, "--out", tmp_path / "work", "-o", tmp_path / "q.pdf")
     assert r.exit_code == 1 and "different subjects (S02, SIM)" in r.stderr
     assert not (tmp_path / "q.pdf").exists()
+
+
+def _text_outside_the_page(reports) -> list[str]:
+    """What is drawn on a page of render.plan(reports) past the page's edge: each text of the
+    page itself and each chart with its titles, labels and tick labels (as the renderer lays
+    them out: matplotlib's tight boxes hold what is drawn), named with the page's title."""
+    from armtrack_cli.report import layout
+    from armtrack_cli.report.render import plan
+
+    plt = layout.setup()
+    bad = []
+    planned = plan(reports)
+    for n, (left, title, draw) in enumerate(planned, 1):
+        fig = layout.page(plt, title)
+        layout.header(fig, left, n, len(planned))
+        draw(fig)
+        fig.canvas.draw()
+        page, renderer = fig.bbox, fig.canvas.get_renderer()
+        drawn = [(f"{t.get_text()[:60]!r}", t.get_window_extent(renderer)) for t in fig.texts
+                 if t.get_visible() and t.get_text().strip()]
+        drawn += [(f"chart {ax.get_title()[:40]!r}", ax.get_tightbbox(renderer))
+                  for ax in fig.axes if ax.get_visible()]
+        bad += [f"page {n} ({title}): {what}" for what, box in drawn
+                if box.x0 < page.x0 - 0.5 or box.x1 > page.x1 + 0.5 or box.y0 < page.y0 - 0.5
+                or box.y1 > page.y1 + 0.5]
+        plt.close(fig)
+    return bad
+
+
+def test_every_text_of_a_session_and_a_progress_report_stays_on_the_page(arm):
+    """Every line a clinician is meant to read lies within the A4 page (a caption once ran
+    off the progress charts' page, cut mid-sentence, and no test saw it)."""
+    import dataclasses
+
+    from armtrack_cli.pipeline.report import gather
+
+    s, out = arm
+    one = gather(s, out)
+    assert not _text_outside_the_page([one])
+    later = dataclasses.replace(one, session_id="circle-02", date="2027-02-01T09:00:00")
+    assert not _text_outside_the_page([one, later])

@@ -191,10 +191,12 @@ def chart_pages(reports: list[SessionReport]) -> list:
                     ax.set_ylim(*lim)
                 unit = words.MEASURES[m][1]
                 ax.set_title(words.name(m) + (f" ({unit})" if unit else ""), fontsize=8)
-            fig.text(0.07, 0.9, f"Each measure by session date (across: {axis}); bars show ± 2 SD "
-                     "of the tracking's uncertainty (none where it gives none).", fontsize=8.5)
-            fig.text(0.07, 0.884, "The y-axes do not start at 0; each is at least 20 % of its "
-                     "largest value tall, so a small change looks small.", fontsize=8.5)
+            for k, line in enumerate((  # one sentence a line: the page is 8.27 in wide
+                    f"Each measure by session date (across: {axis}).",
+                    "Bars show ± 2 SD of the tracking's uncertainty (none where it gives none).",
+                    "The y-axes do not start at 0; each is at least 20 % of its largest value "
+                    "tall, so a small change looks small.")):
+                fig.text(0.07, 0.9 - 0.016 * k, line, fontsize=8.5)
         return draw
 
     return [("Progress over sessions: charts", charts(shown[i:i + 8]))

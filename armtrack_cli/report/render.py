@@ -24,20 +24,13 @@ def session_pages(r: SessionReport) -> list:
     return pages
 
 
-def render(reports: list[SessionReport]) -> bytes:
-    """The PDF of one session, or of several of one subject (progress first, then the first
-    page of each)."""
-    plt = layout.setup()
-    import matplotlib
-    from matplotlib.backends.backend_pdf import PdfPages
-
-    from armtrack_cli.report import fonts, progress, summary
-
-    family, unknown = fonts.families(r.text() for r in reports)
-    matplotlib.rcParams["font.family"] = family  # fallbacks for a name DejaVu Sans lacks
+def plan(reports: list[SessionReport]) -> list[tuple[str, str, object]]:
+    """The pages of one session's PDF, or of several of one subject's (progress first, then
+    the first page of each), in order: (header text, title, draw)."""
+    from armtrack_cli.report import progress, summary
 
     reports = sorted(reports, key=lambda r: (r.date or "", r.session_id))
-    planned = []  # (header text, title, draw)
+    planned = []
     if len(reports) > 1:
         span = f"{reports[0].day} to {reports[-1].day}"
         left = f"Subject {words.clip(reports[0].subject, 40)} · {len(reports)} sessions, {span}"
@@ -47,6 +40,20 @@ def render(reports: list[SessionReport]) -> bytes:
                 f"({words.clip(r.session_id, 24)})")
         pages = session_pages(r) if len(reports) == 1 else [summary.page_one(r)]
         planned += [(left, t, d) for t, d in pages]
+    return planned
+
+
+def render(reports: list[SessionReport]) -> bytes:
+    """The PDF of plan(reports)."""
+    plt = layout.setup()
+    import matplotlib
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    from armtrack_cli.report import fonts
+
+    family, unknown = fonts.families(r.text() for r in reports)
+    matplotlib.rcParams["font.family"] = family  # fallbacks for a name DejaVu Sans lacks
+    planned = plan(reports)
     buf = io.BytesIO()
     meta = {"Title": f"Movement report, subject {reports[0].subject}", "Creator": "armtrack",
             "CreationDate": None, "ModDate": None}  # no clock: same inputs, same bytes
