@@ -141,9 +141,9 @@ def stf_order(path: Path, line_of: np.ndarray, stf: np.ndarray) -> None:
                            "rows are out of order or the file mixes recordings")
 
 
-def stf_rate(path: Path, header_rate: float | None, per_step: np.ndarray) -> float:
-    """The SampleTimeFine clock's rate, checked against the header's."""
-    rate = float(1.0 / np.median(per_step))  # the clock itself, not a header line
+def stf_rate(path: Path, header_rate: float | None, median_step: float) -> float:
+    """The SampleTimeFine clock's rate (from its median step), checked against the header's."""
+    rate = float(1.0 / median_step)  # the clock itself, not a header line
     if header_rate is not None and abs(header_rate / rate - 1.0) > 0.05:
         raise ImuFileError(path, f"states Update Rate {header_rate:g} Hz but its "
                            f"SampleTimeFine clock runs at {rate:.4g} Hz",
@@ -180,7 +180,7 @@ def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float 
         per_step = np.diff(t) / (steps if steps is not None else 1)
         if per_step.size == 0:  # one sample has no clock rate; read_imu refuses it as too short
             return t, float(header_rate or rate_hz or np.nan), dropped, notes
-        return t, stf_rate(path, header_rate, per_step), dropped, notes
+        return t, stf_rate(path, header_rate, np.median(per_step)), dropped, notes
     if stf is not None and np.isfinite(stf).any():
         raise stf_partial(path, tab.line_of[int(np.flatnonzero(~np.isfinite(stf[:, 0]))[0])])
     rate = header_rate or rate_hz

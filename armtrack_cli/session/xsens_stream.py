@@ -14,7 +14,7 @@ import numpy as np
 from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.core.streams import ImuRows
 from armtrack_cli.session import xsens
-from armtrack_cli.session.imu_stream import Deferred, ImuStream, ReadChecks
+from armtrack_cli.session.imu_stream import CountedMedian, Deferred, ImuStream, ReadChecks
 from armtrack_cli.session.numeric_text import Layout, file_chunks, line_chunks, row_blocks
 from armtrack_cli.session.text_table import TextTable, named_groups, sniff_delimiter, table_header
 from armtrack_cli.session.xsens import _orientation, _vec
@@ -83,7 +83,7 @@ class _Clock:
         self.n, self.last = 0, None  # last: the previous row's line, counter, stf, sum, t
         self.mode = None  # "stf" (every SampleTimeFine finite so far) or "counter"
         self.stf_seen, self.stf_any, self.first_nan = False, False, None
-        self.steps: list[np.ndarray] = []
+        self.steps = CountedMedian()  # the clock's steps, for its median
 
     def add(self, tab: TextTable, late: Deferred) -> np.ndarray:
         n, path, last = tab.n_rows, self.path, self.last
@@ -107,7 +107,7 @@ class _Clock:
             u = np.cumsum(np.r_[0.0 if last is None else last[3], d])  # xsens._unwrap on
             t = u * STF_TICK_S
             with np.errstate(divide="ignore", invalid="ignore"):  # a repeat: refused anyway
-                self.steps.append(np.diff(t) / (steps if steps is not None else 1))
+                self.steps.add(np.diff(t) / (steps if steps is not None else 1))
         else:
             u, t = self._counter_times(n, steps)
         if last is not None:
@@ -143,10 +143,10 @@ class _Clock:
     def finish(self, late: Deferred) -> float:
         """The clock's rate, and its errors that need every row."""
         if self.mode == "stf":
-            if not any(s.size for s in self.steps):  # one sample: refused as too short
+            if not self.steps.size:  # one sample: refused as too short
                 return float(self.header_rate or self.rate_hz or np.nan)
             return late.run("stf_rate", xsens.stf_rate, self.path, self.header_rate,
-                            np.concatenate(self.steps))
+                            self.steps.median())
         late.found.pop("stf_ticks", None)  # not checked where some SampleTimeFine is missing
         late.found.pop("stf_order", None)
         if self.stf_any:
