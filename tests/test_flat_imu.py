@@ -14,7 +14,7 @@ from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.pipeline.fuse_imu import SpilledImu
 from armtrack_cli.session import numeric_text, text_head
 from armtrack_cli.session.imu import read_imu
-from armtrack_cli.session.imu_stream import imu_chunks
+from armtrack_cli.session.imu_stream import CountedMedian, imu_chunks
 
 SAMPLE_IMU = Path(__file__).resolve().parents[1] / "sample_sessions" / "circle-01" / "imu.txt"
 HEADER = 8  # circle-01's imu.txt: 8 comment lines, the column header, then 2150 rows
@@ -212,3 +212,18 @@ def test_csv_damage_late_gives_read_imus_message(tmp_path, small_chunks, damage)
     with pytest.raises(ImuFileError):
         SpilledImu(out, imu_chunks(path))
     assert list(out.iterdir()) == []
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 1000, 1001])
+def test_counted_median_is_np_median(n):
+    """The clock's median step from counts of its values, against np.median of them all:
+    a handful of distinct steps (as a clock's) and continuous values, added in chunks."""
+    rng = np.random.default_rng(15)
+    for values in (0.01 + rng.integers(-3, 4, n) * 1e-15, rng.normal(0.01, 1e-4, n)):
+        m = CountedMedian()
+        for part in np.array_split(values, 4):
+            m.add(part)
+        assert m.median() == np.median(values)
+    m = CountedMedian()
+    m.add(np.array([0.01, np.nan, 0.02]))
+    assert np.isnan(m.median()) and np.isnan(np.median([0.01, np.nan, 0.02]))

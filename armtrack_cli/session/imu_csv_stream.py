@@ -35,7 +35,7 @@ def csv_stream(path: Path, lines: list[str]) -> ImuStream | None:
         file_chunks(path, header_at + 1)
     rows = row_blocks(chunks, Layout(len(header), delim, tuple(header), imu_csv.SKIP), path,
                       ImuFileError, groups=idx)
-    stream._chunks = _samples(path, rows, header, idx, stream)
+    stream.chunks = _samples(path, rows, header, idx, stream)
     return stream
 
 

@@ -27,10 +27,10 @@ class ImuStream:
     def __init__(self, path: str, orientation_source: str, chunks: Iterable[ImuRows],
                  rate_hz: float = float("nan")) -> None:
         self.path, self.orientation_source, self.rate_hz = path, orientation_source, rate_hz
-        self._chunks = chunks
+        self.chunks = chunks  # set by a streaming reader once made (it sets rate_hz at its end)
 
     def __iter__(self) -> Iterator[ImuRows]:
-        return iter(self._chunks)
+        return iter(self.chunks)
 
 
 def imu_chunks(path: str | Path, *, rate_hz: float | None = None, topic: str | None = None,

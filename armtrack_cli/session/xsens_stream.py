@@ -43,7 +43,7 @@ def mt_manager_stream(path: Path, lines: list[str], rate_hz: float | None) -> Im
         file_chunks(path, header_at + 1)
     rows = row_blocks(chunks, Layout(len(raw), delim, tuple(raw)), path, ImuFileError,
                       groups=idx)
-    stream._chunks = _samples(path, rows, names, idx, _Clock(path, header_rate, rate_hz), coord,
+    stream.chunks = _samples(path, rows, names, idx, _Clock(path, header_rate, rate_hz), coord,
                               stream)
     return stream
 
