@@ -227,3 +227,42 @@ def test_counted_median_is_np_median(n):
     m = CountedMedian()
     m.add(np.array([0.01, np.nan, 0.02]))
     assert np.isnan(m.median()) and np.isnan(np.median([0.01, np.nan, 0.02]))
+
+
+def test_truncated_last_line_alone_in_its_chunk(tmp_path, small_chunks):
+    """A last line cut short and without its line break is a chunk of its own when streamed
+    from the file, with no row once dropped: the samples are still read_imu's."""
+    lines = _lines()
+    path = tmp_path / "imu.txt"
+    path.write_text("\n".join(lines) + "\n" + lines[-1][:20])
+    assert _same_arrays(path) >= 5
+    csv = _csv_lines()
+    path = tmp_path / "imu.csv"
+    path.write_text("\n".join(csv) + "\n" + csv[-1][:10])
+    assert _same_arrays(path) >= 5
+
+
+DATA = Path(__file__).resolve().parent / "data"
+CORPUS = sorted([*DATA.glob("xsens/*.txt"), *DATA.glob("bad/imu-*/*"), *DATA.glob("bad/csv-*/*"),
+                 *DATA.glob("bad/dot-*/*")])
+
+
+def _outcome(read):
+    try:
+        return "read", read()
+    except Exception as e:  # noqa: BLE001  (any error: the same type and message expected)
+        return type(e).__name__, str(e)
+
+
+@pytest.mark.parametrize("path", CORPUS, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_corpus_streams_as_read_imu(path, small_chunks):
+    """Every IMU file of the test data (real MT Manager exports of several generations and
+    delimiters, NaN cells, matrix orientation; the bad-input corpus): the stream reads what
+    read_imu reads, or refuses it with its error."""
+    whole = _outcome(lambda: read_imu(path, rate_hz=100.0))
+    streamed = _outcome(lambda: list(imu_chunks(path, rate_hz=100.0)))
+    assert streamed[0] == whole[0]
+    if whole[0] != "read":
+        assert streamed[1] == whole[1]
+    elif whole[1].quat is not None:
+        _same_arrays(path, rate_hz=100.0)

@@ -45,6 +45,8 @@ def _samples(path: Path, blocks, header: list[str], idx, stream: ImuStream):
     late, checks = Deferred(), ReadChecks(path)
     t0, last, missing, steps = None, None, [None, 0], []
     for rows in blocks:
+        if not rows.line_of.size:  # a chunk of comments, or a truncated last line dropped
+            continue
         tab = TextTable(header, None, rows.line_of, (), dict(zip(idx, rows.groups)))
         t = tab.columns("t")[:, 0]
         nan = ~np.isfinite(t)

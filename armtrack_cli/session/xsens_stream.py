@@ -57,6 +57,8 @@ def _samples(path: Path, blocks, names, idx, clock: _Clock, coord: str, stream: 
     the last."""
     late, checks = Deferred(), ReadChecks(path)
     for rows in blocks:
+        if not rows.line_of.size:  # a chunk of comments, or a truncated last line dropped
+            continue
         tab = _table(names, idx, rows.line_of, rows.groups)
         t = clock.add(tab, late)
         q = _orientation(path, tab)
