@@ -44,6 +44,17 @@ class ImuSamples:
 
 
 @dataclass(frozen=True)
+class ImuRows:
+    """Samples of an IMU recording on its clock, a chunk or a span of them: t (M,) s, quat
+    (M, 4) B -> W, acc (M, 3) m/s², gyr (M, 3) rad/s (NaN where the file has no gyroscope)."""
+
+    t: np.ndarray
+    quat: np.ndarray
+    acc: np.ndarray
+    gyr: np.ndarray
+
+
+@dataclass(frozen=True)
 class MarkerTrajectories:
     """Optical markers (Qualisys), in the capture system's own frame.
 

@@ -3,20 +3,10 @@ by time span on the IMU's own clock, so that each window takes its own rows (iss
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-
-@dataclass(frozen=True)
-class ImuRows:
-    """Usable samples on the IMU's clock: t (M,) s, quat (M, 4) B -> W, acc (M, 3) m/s²,
-    gyr (M, 3) rad/s (NaN where the file has no gyroscope)."""
-
-    t: np.ndarray
-    quat: np.ndarray
-    acc: np.ndarray
-    gyr: np.ndarray
+from armtrack_cli.core.streams import ImuRows
+from armtrack_cli.session.imu_stream import chunks_of  # noqa: F401  (for the tests)
 
 
 class ArrayImu:
@@ -56,11 +46,12 @@ class SpilledImu:
     """The usable samples kept on disk (session/spill.py, in the output folder) as they are read
     a chunk at a time, read back by span: memory a window's samples, whatever the length."""
 
-    def __init__(self, folder, chunks, *, rate_hz: float, orientation_source: str,
-                 path: str) -> None:
+    def __init__(self, folder, chunks, *, rate_hz: float | None = None,
+                 orientation_source: str | None = None, path: str | None = None) -> None:
+        """``chunks``: ImuRows; a session/imu_stream.ImuStream gives the rate, orientation
+        source and path not given here (its rate is known once its chunks are read)."""
         from armtrack_cli.session.spill import Spill
 
-        self.rate_hz, self.orientation_source, self.path = rate_hz, orientation_source, path
         self._spill = Spill(folder)
         coarse: list[np.ndarray] = []
         try:
@@ -75,6 +66,9 @@ class SpilledImu:
         except BaseException:
             self._spill.close()
             raise
+        self.rate_hz = rate_hz if rate_hz is not None else chunks.rate_hz
+        self.orientation_source = orientation_source or chunks.orientation_source
+        self.path = path or chunks.path
         self._coarse = np.concatenate(coarse) if coarse else np.empty(0)
         self.t_first = float(self._coarse[0]) if self._coarse.size else np.nan
 
@@ -90,11 +84,3 @@ class SpilledImu:
 
     def close(self) -> None:
         self._spill.close()
-
-
-def chunks_of(imu, rows: int = 65_536):
-    """A recording read whole (ImuSamples), as ImuRows chunks: for a reader that cannot
-    stream its format."""
-    for a in range(0, imu.n, rows):
-        sl = slice(a, a + rows)
-        yield ImuRows(imu.t[sl], imu.quat[sl], imu.acc[sl], imu.gyr[sl])

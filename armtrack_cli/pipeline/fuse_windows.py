@@ -43,8 +43,8 @@ MEASURED = ("t", "wrist_x", "wrist_y", "wrist_z", "elbow_x", "elbow_y", "elbow_z
 
 def sources(session: Session, dest: Path) -> fuse_span.Sources:
     """The camera, detections and IMU every window reads (prepare()'s checks, in its order)."""
-    from armtrack_cli.pipeline.fuse_imu import SpilledImu, chunks_of
-    from armtrack_cli.session.imu import read_imu
+    from armtrack_cli.pipeline.fuse_imu import SpilledImu
+    from armtrack_cli.session.imu_stream import imu_chunks
     from armtrack_cli.session.tables import read_patch_detections
     from armtrack_cli.session.video import probe_video
 
@@ -55,11 +55,10 @@ def sources(session: Session, dest: Path) -> fuse_span.Sources:
                         f"video is {video.width}x{video.height}", "rerun `armtrack calibrate`")
     t_f, uv = read_patch_detections(dest / "detections.csv", width=cam.width, height=cam.height,
                                     n_frames=video.n_frames)
-    whole = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
-                     field=session.imu.field)  # TODO chunked readers
-    imu = SpilledImu(dest, chunks_of(whole), rate_hz=whole.rate_hz,
-                     orientation_source=whole.orientation_source, path=whole.path)
-    del whole  # on disk now: each window reads its own samples
+    # on disk as it is read, a chunk at a time (the formats that stream): each window reads
+    # its own samples, and no reader holds the whole recording
+    imu = SpilledImu(dest, imu_chunks(session.imu.file, rate_hz=session.imu.rate_hz,
+                                      topic=session.imu.topic, field=session.imu.field))
     release_memory()
     proj = models.Projection(cam)
     proj.pose_cov = camera_pose.board_prior(proj, session.camera.board)

@@ -33,6 +33,11 @@ def unit_quaternions(path: Path, q: np.ndarray, where: Callable[[int], str], wha
 
 def rate_and_dropped(t: np.ndarray) -> tuple[float, int]:
     """Nominal rate (1 / median step) and the samples missing in the gaps between times."""
-    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    dt = nominal_step(np.diff(t))
     gaps = time_gaps(t, dt)
     return 1.0 / dt, int(np.sum(np.round(np.diff(t)[gaps] / dt) - 1))
+
+
+def nominal_step(steps: np.ndarray) -> float:
+    """The stream's nominal sample period: its median step (1 s when it has none)."""
+    return float(np.median(steps)) if steps.size else 1.0

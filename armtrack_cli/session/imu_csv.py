@@ -21,6 +21,7 @@ from armtrack_cli.session.text_table import (
 )
 
 REQUIRED = ("t", "ax", "ay", "az", "gx", "gy", "gz")
+SKIP = ("#",)  # comment lines among the rows
 GROUPS = (("t",), ("ax", "ay", "az"), ("gx", "gy", "gz"), ("mx", "my", "mz"), ("qw", "qx", "qy", "qz"))
 
 
@@ -39,21 +40,33 @@ def check_times(path: Path, t: np.ndarray, line_of: np.ndarray, column: str = "t
     """Times must be present, finite and strictly increasing."""
     nan = ~np.isfinite(t)
     if nan.any():
-        idx = np.flatnonzero(nan)
-        raise ImuFileError(path, f"line {line_of[idx[0]]}: column {column!r} is empty or NaN in "
-                           f"{idx.size} rows", "sample times cannot be missing")
+        times_missing(path, line_of[np.flatnonzero(nan)[0]], int(nan.sum()), column)
     d = np.diff(t)
+    times_repeat(path, t, line_of, d)
+    times_back(path, t, line_of, d)
+
+
+# check_times' checks one by one, for imu_csv_stream.py (a chunk's rows, the previous last)
+def times_missing(path: Path, line: int, count: int, column: str = "t") -> None:
+    raise ImuFileError(path, f"line {line}: column {column!r} is empty or NaN in "
+                       f"{count} rows", "sample times cannot be missing")
+
+
+def times_repeat(path: Path, t: np.ndarray, line_of: np.ndarray, d: np.ndarray) -> None:
     if (d == 0).any():
         r = int(np.flatnonzero(d == 0)[0]) + 1
         raise ImuFileError(path, f"line {line_of[r]}: time {t[r]:g} s repeats the previous row")
+
+
+def times_back(path: Path, t: np.ndarray, line_of: np.ndarray, d: np.ndarray) -> None:
     if (d < 0).any():
         r = int(np.flatnonzero(d < 0)[0]) + 1
         raise ImuFileError(path, f"line {line_of[r]}: time goes back from {t[r - 1]:g} to "
                            f"{t[r]:g} s", "rows must be in time order")
 
 
-def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSamples:
-    lines = lines if lines is not None else read_text_lines(path, ImuFileError, "an IMU CSV")
+def csv_head(path: Path, lines: list[str]) -> tuple[int, str]:
+    """The header line's index and its delimiter, refused unless commas."""
     header_at = header_line(lines)
     if header_at is None:
         raise ImuFileError(path, "has no header line")
@@ -62,10 +75,26 @@ def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSample
         seen = {"\t": "tabs", ";": "semicolons", None: "spaces"}[delim]
         raise ImuFileError(path, f"is separated by {seen}, not commas",
                            "the generic IMU CSV is comma-separated: t,ax,ay,az,gx,gy,gz")
-    tab = parse_table(path, lines, header_at, delim, ImuFileError, skip_prefixes=("#",),
+    return header_at, delim
+
+
+def missing_columns(header: list[str]) -> list[str]:
+    names = [h.lower() for h in header]
+    return [c for c in REQUIRED if c not in names]
+
+
+def unit_q(path: Path, q: np.ndarray, line_of: np.ndarray) -> np.ndarray:
+    """q normalised in place, refused at the first row not near unit norm (its line named)."""
+    return unit_quaternions(path, q, lambda r: f"line {line_of[r]}", "quaternion (qw,qx,qy,qz)",
+                            "is the order (w, x, y, z)?")
+
+
+def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSamples:
+    lines = lines if lines is not None else read_text_lines(path, ImuFileError, "an IMU CSV")
+    header_at, delim = csv_head(path, lines)
+    tab = parse_table(path, lines, header_at, delim, ImuFileError, skip_prefixes=SKIP,
                       groups=named_groups(*GROUPS))  # only what is returned kept (issue 15)
-    names = [h.lower() for h in tab.header]
-    missing = [c for c in REQUIRED if c not in names]
+    missing = missing_columns(tab.header)
     if missing:
         raise ImuFileError(path, f"lacks column(s) {', '.join(missing)}",
                            f"the generic CSV needs {','.join(REQUIRED)}; header is "
@@ -78,9 +107,7 @@ def read_generic_csv(path: Path, *, lines: list[str] | None = None) -> ImuSample
     mag = tab.columns("mx", "my", "mz") if tab.has("mx", "my", "mz") else None
     q = None
     if tab.has("qw", "qx", "qy", "qz"):
-        q = unit_quaternions(path, tab.columns("qw", "qx", "qy", "qz"),
-                             lambda r: f"line {tab.line_of[r]}", "quaternion (qw,qx,qy,qz)",
-                             "is the order (w, x, y, z)?")
+        q = unit_q(path, tab.columns("qw", "qx", "qy", "qz"), tab.line_of)
     rate, dropped = rate_and_dropped(t)
     return ImuSamples(str(path), "csv", t, acc, gyr, mag, q, rate, dropped,
                       "file" if q is not None else "none", tab.notes)

@@ -133,14 +133,21 @@ def parse_table(path: Path, lines: list[str], header_at: int, delimiter: str | N
     ragged row, or a cell that is not a number, is an error naming its line (and column).
     With ``groups`` (the header -> tuples of column indices), only those columns are kept,
     each group in its own array (TextTable.groups)."""
+    return parse_rows(path, lines, header_at + 1, table_header(path, lines[header_at], header_at,
+                                                               delimiter, error),
+                      delimiter, error, skip_prefixes=skip_prefixes, groups=groups)
+
+
+def table_header(path: Path, line: str, header_at: int, delimiter: str | None,
+                 error: type[DataError]) -> list[str]:
+    """parse_table's column names of the header ``line`` (lines[header_at])."""
     header = [h[1:-1] if len(h) > 1 and h[0] == h[-1] == '"' else h  # R's write.csv quotes
-              for h in split_row(lines[header_at], delimiter)]
+              for h in split_row(line, delimiter)]
     while header and header[-1] == "":
         header.pop()
     if not header:
         raise error(path, f"line {header_at + 1}: the column header is empty")
-    return parse_rows(path, lines, header_at + 1, header, delimiter, error,
-                      skip_prefixes=skip_prefixes, groups=groups)
+    return header
 
 
 def parse_rows(path: Path, lines: list[str], first_line: int, header: list[str],

@@ -88,24 +88,76 @@ def _header_rate(path: Path, i: int, text: str) -> float:
     return rate
 
 
-def _counter_steps(path: Path, tab: TextTable, counter: np.ndarray) -> np.ndarray:
+def _counter_steps(path: Path, line_of: np.ndarray, counter: np.ndarray) -> np.ndarray:
     """Steps between consecutive packet counters (1 = none lost), checked for repeats."""
+    counter_whole(path, line_of, counter)
+    d = np.mod(np.diff(counter), COUNTER_WRAP)
+    counter_repeats(path, line_of, counter, d)
+    counter_back(path, line_of, counter, d)
+    return d
+
+
+# _counter_steps' and _times' checks one by one: xsens_stream.py runs each on a chunk's rows
+# (the previous chunk's last row before them) and raises the first of each, in this order
+def counter_whole(path: Path, line_of: np.ndarray, counter: np.ndarray) -> None:
     bad = ~np.isfinite(counter) | (counter < 0) | (counter != np.round(counter))
     if bad.any():
         r = int(np.flatnonzero(bad)[0])
-        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter is empty or not a "
+        raise ImuFileError(path, f"line {line_of[r]}: PacketCounter is empty or not a "
                            f"whole number ({counter[r]})")
-    d = np.mod(np.diff(counter), COUNTER_WRAP)
+
+
+def counter_repeats(path: Path, line_of: np.ndarray, counter: np.ndarray, d: np.ndarray) -> None:
     if (d == 0).any():
         r = int(np.flatnonzero(d == 0)[0]) + 1
-        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter {int(counter[r])} "
+        raise ImuFileError(path, f"line {line_of[r]}: PacketCounter {int(counter[r])} "
                            "repeats the previous packet", "is the file two recordings pasted together?")
+
+
+def counter_back(path: Path, line_of: np.ndarray, counter: np.ndarray, d: np.ndarray) -> None:
     if (d > COUNTER_WRAP // 2).any():
         r = int(np.flatnonzero(d > COUNTER_WRAP // 2)[0]) + 1
-        raise ImuFileError(path, f"line {tab.line_of[r]}: PacketCounter jumps back from "
+        raise ImuFileError(path, f"line {line_of[r]}: PacketCounter jumps back from "
                            f"{int(counter[r - 1])} to {int(counter[r])}",
                            "rows are out of order or the file mixes recordings")
-    return d
+
+
+def stf_ticks(path: Path, line_of: np.ndarray, stf: np.ndarray) -> None:
+    bad = (stf < 0) | (stf >= STF_WRAP) | (stf != np.round(stf))
+    if bad.any():
+        r = int(np.flatnonzero(bad)[0])
+        raise ImuFileError(path, f"line {line_of[r]}: SampleTimeFine {stf[r]:g} is not "
+                           "a tick count (a whole number from 0 to 2^32 − 1)")
+
+
+def stf_order(path: Path, line_of: np.ndarray, stf: np.ndarray) -> None:
+    back = np.diff(stf)
+    # a wrap at 2^32 jumps back by nearly 2^32; a smaller step back is a damaged row
+    bad = (back <= 0) & (back > -STF_WRAP / 2)
+    if bad.any():
+        r = int(np.flatnonzero(bad)[0]) + 1
+        raise ImuFileError(path, f"line {line_of[r]}: SampleTimeFine steps back or "
+                           f"repeats ({int(stf[r - 1])} then {int(stf[r])})",
+                           "rows are out of order or the file mixes recordings")
+
+
+def stf_rate(path: Path, header_rate: float | None, median_step: float) -> float:
+    """The SampleTimeFine clock's rate (from its median step), checked against the header's."""
+    rate = float(1.0 / median_step)  # the clock itself, not a header line
+    if header_rate is not None and abs(header_rate / rate - 1.0) > 0.05:
+        raise ImuFileError(path, f"states Update Rate {header_rate:g} Hz but its "
+                           f"SampleTimeFine clock runs at {rate:.4g} Hz",
+                           "correct or delete the Update Rate header line")
+    return rate
+
+
+def stf_partial(path: Path, line: int) -> ImuFileError:
+    return ImuFileError(path, f"line {line}: SampleTimeFine is missing in some rows but not all")
+
+
+def no_rate(path: Path) -> ImuFileError:
+    return ImuFileError(path, "states no update rate and has no SampleTimeFine",
+                        "set [imu] rate_hz in session.toml to the rate it was recorded at")
 
 
 def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float | None,
@@ -117,42 +169,23 @@ def _times(path: Path, tab: TextTable, *, stf_tick_s: float, header_rate: float 
     """
     notes: list[str] = []
     counter = _vec(tab, ["PacketCounter"])
-    steps = _counter_steps(path, tab, counter[:, 0]) if counter is not None else None
+    steps = _counter_steps(path, tab.line_of, counter[:, 0]) if counter is not None else None
     dropped = int(np.sum(steps - 1)) if steps is not None else 0
     stf = _vec(tab, ["SampleTimeFine"])
     if stf is not None and np.isfinite(stf).all():
-        bad = (stf[:, 0] < 0) | (stf[:, 0] >= STF_WRAP) | (stf[:, 0] != np.round(stf[:, 0]))
-        if bad.any():
-            r = int(np.flatnonzero(bad)[0])
-            raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine {stf[r, 0]:g} is not "
-                               "a tick count (a whole number from 0 to 2^32 − 1)")
-        back = np.diff(stf[:, 0])
-        # a wrap at 2^32 jumps back by nearly 2^32; a smaller step back is a damaged row
-        bad = (back <= 0) & (back > -STF_WRAP / 2)
-        if bad.any():
-            r = int(np.flatnonzero(bad)[0]) + 1
-            raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine steps back or "
-                               f"repeats ({int(stf[r - 1, 0])} then {int(stf[r, 0])})",
-                               "rows are out of order or the file mixes recordings")
+        stf_ticks(path, tab.line_of, stf[:, 0])
+        stf_order(path, tab.line_of, stf[:, 0])
         t = _unwrap(stf[:, 0], STF_WRAP)
         t *= stf_tick_s
         per_step = np.diff(t) / (steps if steps is not None else 1)
         if per_step.size == 0:  # one sample has no clock rate; read_imu refuses it as too short
             return t, float(header_rate or rate_hz or np.nan), dropped, notes
-        rate = float(1.0 / np.median(per_step))  # the clock itself, not a header line
-        if header_rate is not None and abs(header_rate / rate - 1.0) > 0.05:
-            raise ImuFileError(path, f"states Update Rate {header_rate:g} Hz but its "
-                               f"SampleTimeFine clock runs at {rate:.4g} Hz",
-                               "correct or delete the Update Rate header line")
-        return t, rate, dropped, notes
+        return t, stf_rate(path, header_rate, np.median(per_step)), dropped, notes
     if stf is not None and np.isfinite(stf).any():
-        r = int(np.flatnonzero(~np.isfinite(stf[:, 0]))[0])
-        raise ImuFileError(path, f"line {tab.line_of[r]}: SampleTimeFine is missing in some rows "
-                           "but not all")
+        raise stf_partial(path, tab.line_of[int(np.flatnonzero(~np.isfinite(stf[:, 0]))[0])])
     rate = header_rate or rate_hz
     if rate is None:
-        raise ImuFileError(path, "states no update rate and has no SampleTimeFine",
-                           "set [imu] rate_hz in session.toml to the rate it was recorded at")
+        raise no_rate(path)
     if steps is None:
         notes.append("no PacketCounter: dropped samples cannot be detected")
         return np.arange(tab.n_rows) / rate, rate, 0, notes
@@ -189,10 +222,9 @@ def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_ra
                                       rate_hz=rate_hz)
     q = _orientation(path, tab)
     if q is not None:
-        q = unit_quaternions(path, q, lambda r: f"line {tab.line_of[r]}",
-                             "orientation quaternion", "are the columns mislabelled or scaled?")
+        q = unit_orientation(path, q, tab.line_of)
         if coord == "NED":
-            q = quat.multiply(Q_NED_TO_ZUP, q)
+            q = to_zup(q, coord)
             notes.append("orientation converted from NED to z-up (180° about x)")
     acc = _vec(tab, ["Acc_X", "Acc_Y", "Acc_Z"])
     absent: set[str] = set()  # channel groups the file does not export at all
@@ -204,8 +236,7 @@ def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_ra
             notes.append("no accelerometer (Acc_X/Acc_Y/Acc_Z) columns; columns seen: "
                          + ", ".join(tab.header))
         else:
-            # FreeAcc = a_W (gravity removed, global frame): f_B = R_WBᵀ (a_W − g_W)
-            acc = quat.rotate(quat.conjugate(q), free + np.array([0.0, 0.0, GRAVITY]))
+            acc = from_free(free, q)
             notes.append("specific force rebuilt from FreeAcc and orientation")
     gyr = _vec(tab, ["Gyr_X", "Gyr_Y", "Gyr_Z"])
     if gyr is None:
@@ -224,12 +255,39 @@ def _build(path: Path, tab: TextTable, fmt: str, *, stf_tick_s: float, header_ra
                       "file" if q is not None else "none", tuple(notes + tnotes + list(tab.notes)))
 
 
+def unit_orientation(path: Path, q: np.ndarray, line_of: np.ndarray) -> np.ndarray:
+    """q normalised in place, refused at the first row not near unit norm (its line named)."""
+    return unit_quaternions(path, q, lambda r: f"line {line_of[r]}", "orientation quaternion",
+                            "are the columns mislabelled or scaled?")
+
+
+def to_zup(q: np.ndarray, coord: str) -> np.ndarray:
+    """Quaternions R_GS of an export in ``coord`` with G made z-up (NED turned about x)."""
+    return quat.multiply(Q_NED_TO_ZUP, q) if coord == "NED" else q
+
+
+def from_free(free: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """FreeAcc = a_W (gravity removed, global frame): f_B = R_WBᵀ (a_W − g_W)."""
+    return quat.rotate(quat.conjugate(q), free + np.array([0.0, 0.0, GRAVITY]))
+
+
 def read_mt_manager(path: Path, *, rate_hz: float | None = None,
                     lines: list[str] | None = None) -> ImuSamples:
     """An MT Manager text export (legacy, 2019/2020, 2022; any delimiter)."""
     lines = lines if lines is not None else read_text_lines(path, ImuFileError,
                                                             "an Xsens MT Manager export")
-    header_rate, coord, notes = None, "ENU", []
+    header_rate, coord, header_at = mt_head(path, lines)
+    delim = sniff_delimiter(lines[header_at])
+    tab = _table(path, lines, header_at, delim)
+    notes = [f"coordinate system {coord}"] if coord != "ENU" else []
+    return _build(path, tab, "xsens-mt", stf_tick_s=1e-4, header_rate=header_rate,
+                  rate_hz=rate_hz, gyro_scale=1.0, coord=coord, notes=notes)
+
+
+def mt_head(path: Path, lines: list[str]) -> tuple[float | None, str, int]:
+    """An MT Manager export's header: its Update Rate (or None), coordinate system and the
+    index of its column header line."""
+    header_rate, coord = None, "ENU"
     header_at = None
     for i, ln in enumerate(lines):
         if ln.startswith("//"):
@@ -249,12 +307,7 @@ def read_mt_manager(path: Path, *, rate_hz: float | None = None,
     if header_at is None:
         raise ImuFileError(path, "has only comment lines: no column header and no data "
                            "(truncated export?)")
-    delim = sniff_delimiter(lines[header_at])
-    tab = _table(path, lines, header_at, delim)
-    if coord != "ENU":
-        notes.append(f"coordinate system {coord}")
-    return _build(path, tab, "xsens-mt", stf_tick_s=1e-4, header_rate=header_rate,
-                  rate_hz=rate_hz, gyro_scale=1.0, coord=coord, notes=notes)
+    return header_rate, coord, header_at
 
 
 def _table(path: Path, lines: list[str], header_at: int, delim: str | None) -> TextTable:
