@@ -54,15 +54,11 @@ class Prepared:
     offset_s: float | None = None  # the IMU's clock offset used (a windowed fuse's; s)
 
 
-def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False
-            ) -> Prepared:
-    """The session's inputs on its clock; with ``beside``, a declared IMU offset's check is
-    left to run on a second thread from ``imu_offset.start()``, beside the caller's work
-    (pipeline/imu_offset.py); ``imu_offset.result()`` waits for it."""
+def camera_and_detections(session: Session, dest: Path):
+    """The calibrated camera (checked against the video's size) and the patch detections:
+    (camera, t (n,) s of every frame, uv (n, 2) px, NaN where none)."""
     from armtrack_cli.session.tables import read_patch_detections
 
-    require(session, "imu")
-    require(session, "camera")
     cam = read_calibrated_camera(dest / "camera.yaml")
     video = probe_video(session.camera.video)
     if (video.width, video.height) != (cam.width, cam.height):
@@ -70,6 +66,17 @@ def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = Fal
                         f"video is {video.width}x{video.height}", "rerun `armtrack calibrate`")
     t_f, uv = read_patch_detections(dest / "detections.csv", width=cam.width, height=cam.height,
                                     n_frames=video.n_frames)
+    return cam, t_f, uv
+
+
+def prepare(session: Session, dest: Path, s: FuseSettings, *, beside: bool = False
+            ) -> Prepared:
+    """The session's inputs on its clock; with ``beside``, a declared IMU offset's check is
+    left to run on a second thread from ``imu_offset.start()``, beside the caller's work
+    (pipeline/imu_offset.py); ``imu_offset.result()`` waits for it."""
+    require(session, "imu")
+    require(session, "camera")
+    cam, t_f, uv = camera_and_detections(session, dest)
     imu = read_imu(session.imu.file, rate_hz=session.imu.rate_hz, topic=session.imu.topic,
                    field=session.imu.field)
     ok = np.isfinite(imu.acc).all(axis=1) & np.isfinite(imu.quat).all(axis=1)

@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 
-from armtrack_cli.core.errors import DataError
 from armtrack_cli.core.threads import Done
 from armtrack_cli.core.windows import Window
 from armtrack_cli.fuse import camera_pose, models
@@ -30,10 +29,10 @@ from armtrack_cli.pipeline.fuse import (
     Prepared,
     _initial_state,
     _timed_run,
+    camera_and_detections,
     detection_counts,
 )
 from armtrack_cli.pipeline.fuse_summary import combined
-from armtrack_cli.session.camera_yaml import read_calibrated_camera
 from armtrack_cli.session.config import Session
 from armtrack_cli.session.spill import Spill
 
@@ -45,16 +44,8 @@ def sources(session: Session, dest: Path) -> fuse_span.Sources:
     """The camera, detections and IMU every window reads (prepare()'s checks, in its order)."""
     from armtrack_cli.pipeline.fuse_imu import SpilledImu
     from armtrack_cli.session.imu_stream import imu_chunks
-    from armtrack_cli.session.tables import read_patch_detections
-    from armtrack_cli.session.video import probe_video
 
-    cam = read_calibrated_camera(dest / "camera.yaml")
-    video = probe_video(session.camera.video)
-    if (video.width, video.height) != (cam.width, cam.height):
-        raise DataError(dest / "camera.yaml", f"is for {cam.width}x{cam.height} images but the "
-                        f"video is {video.width}x{video.height}", "rerun `armtrack calibrate`")
-    t_f, uv = read_patch_detections(dest / "detections.csv", width=cam.width, height=cam.height,
-                                    n_frames=video.n_frames)
+    cam, t_f, uv = camera_and_detections(session, dest)
     # on disk as it is read, a chunk at a time (the formats that stream): each window reads
     # its own samples, and no reader holds the whole recording
     imu = SpilledImu(dest, imu_chunks(session.imu.file, rate_hz=session.imu.rate_hz,
