@@ -10,11 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from armtrack_cli.core.counted_median import CountedMedian
 from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.pipeline.fuse_imu import SpilledImu
 from armtrack_cli.session import numeric_text, text_head
 from armtrack_cli.session.imu import read_imu
-from armtrack_cli.session.imu_stream import CountedMedian, imu_chunks
+from armtrack_cli.session.imu_stream import imu_chunks
 
 SAMPLE_IMU = Path(__file__).resolve().parents[1] / "sample_sessions" / "circle-01" / "imu.txt"
 HEADER = 8  # circle-01's imu.txt: 8 comment lines, the column header, then 2150 rows

@@ -8,12 +8,12 @@ is still the error reported first, as there)."""
 
 from __future__ import annotations
 
-from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
+from armtrack_cli.core.counted_median import CountedMedian
 from armtrack_cli.core.errors import GroundTruthError
 from armtrack_cli.core.limits import MAX_SESSION_S
 from armtrack_cli.session.numeric_text import Layout, file_chunks, line_chunks, row_blocks
@@ -29,7 +29,7 @@ class _Clock:
     def __init__(self, path: Path, freq: float):
         self.path, self.freq = path, freq
         self.empty = self.back = None
-        self.steps: Counter = Counter()
+        self.steps = CountedMedian()
         self.first = self.last = None
 
     def add(self, t: np.ndarray, line_of: np.ndarray) -> None:
@@ -42,22 +42,12 @@ class _Clock:
             r = int(np.flatnonzero(d <= 0)[0])
             self.back = (f"line {line_of[r + len(t) - len(prev) + 1]}: time goes from "
                          f"{prev[r]:g} to {prev[r + 1]:g} s")
-        self.steps.update(d.tolist())
+        self.steps.add(d)
         self.first = t[0] if self.first is None else self.first
         self.last = t[-1]
 
     def median_step(self) -> float:
-        n = sum(self.steps.values())
-        if not n:
-            return 1.0 / self.freq
-        order = sorted(self.steps.items())
-        at, mid = 0, []
-        for v, c in order:  # the (n − 1) // 2-th and n // 2-th smallest steps
-            for k in ((n - 1) // 2, n // 2):
-                if at <= k < at + c:
-                    mid.append(v)
-            at += c
-        return float(np.mean(mid))
+        return self.steps.median() if self.steps.size else 1.0 / self.freq
 
     def check(self) -> None:
         """read_qualisys's _times errors, in its order."""

@@ -11,10 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
+from armtrack_cli.core.counted_median import CountedMedian
 from armtrack_cli.core.errors import ImuFileError
 from armtrack_cli.core.streams import ImuRows
 from armtrack_cli.session import xsens
-from armtrack_cli.session.imu_stream import CountedMedian, Deferred, ImuStream, ReadChecks
+from armtrack_cli.session.imu_stream import Deferred, ImuStream, ReadChecks
 from armtrack_cli.session.numeric_text import Layout, file_chunks, line_chunks, row_blocks
 from armtrack_cli.session.text_table import TextTable, named_groups, sniff_delimiter, table_header
 from armtrack_cli.session.xsens import _orientation, _vec
