@@ -38,6 +38,14 @@ PARAMS = ("shoulder_x", "shoulder_y", "shoulder_z", "upper_arm_m", "forearm_m")
 # (a 1 cm-SD estimate is hardly moved by a 5 cm-SD prior).
 PRIOR_L = (0.30, 0.26)
 PRIOR_SD_M = 0.05
+# W's z = 0 is the table top (SESSION_FORMAT.md), and a seated subject with a hand on the table
+# has the shoulder joint ~0.2-0.35 m above it. An elbow path that is nearly flat leaves its
+# sphere's centre on either side of it, a mirror pair the data hardly tell apart (UE-ADL's reach
+# across: χ² 2.7 under the table, 3.8 at the shoulder); the mirror lies at or under the table.
+# A solution lower than this is taken only when no start gives one above it. (A prior on the
+# height would slide every estimate along the ridge the data leave flat instead:
+# docs/validation-arm-auto.md.)
+SHOULDER_MIN_Z_M = 0.10
 
 
 @dataclass(frozen=True)
@@ -303,6 +311,9 @@ def estimate_arm(steps: Steps, uv: np.ndarray, q_WB: np.ndarray, t: np.ndarray,
     first = uv[np.flatnonzero(np.isfinite(uv).all(1))[0]]
     starts = shoulder_guesses(proj, first) if free[0] else fixed[None, :3]
     tried = []
+
+    def plausible(x) -> bool:
+        return not free[2] or prob.unpack(x)[4][2] >= SHOULDER_MIN_Z_M
     for continuous in (False, True):
         for S0 in starts:
             theta = np.where(free, np.r_[S0, PRIOR_L], fixed)
@@ -311,8 +322,11 @@ def estimate_arm(steps: Steps, uv: np.ndarray, q_WB: np.ndarray, t: np.ndarray,
                 continue  # the same start as a table one (the wrist on the table throughout)
             tried.append(x0)
             x, r, J = levenberg_marquardt(prob, prob.jacobian, x0)
-            # a continuous start's minimum replaces one only when 1 more likely (2 in χ²)
-            if best is None or r @ r < best[1] @ best[1] - (2.0 if continuous else 0.0):
+            # a shoulder above the table beats one under it; else a continuous start's minimum
+            # replaces one only when 1 more likely (2 in χ²)
+            if best is None or plausible(x) > plausible(best[0]) or (
+                    plausible(x) == plausible(best[0])
+                    and r @ r < best[1] @ best[1] - (2.0 if continuous else 0.0)):
                 best = (x, r, J)
     x, r, J = best
     p, _, dth, _, th = prob.unpack(x)

@@ -83,7 +83,8 @@ def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
     """The sphere fit ``est`` refined by the whole session: the arm smoother with the arm as
     static states (fuse/arm_refine.py), iterated from the sphere fit and a first pass with its
     arm; SDs from the smoother's covariance. The sphere fit stands when the refinement does
-    not end finite (or meets a singular matrix) and within REFINE_MAX_MOVE_M of it."""
+    not end finite (or meets a singular matrix), within REFINE_MAX_MOVE_M of it and, when the
+    sphere fit's shoulder is above arm_auto.SHOULDER_MIN_Z_M, above that too."""
     inp, fa = prepared.inputs, session.imu.forearm_unit
     theta0, free = np.r_[est.shoulder, est.upper_arm_m, est.forearm_m], free_of(est.estimated)
     mean, sd0 = _prior(free, theta0, est.shoulder)
@@ -95,7 +96,8 @@ def refined(session: Session, prepared, est: arm_auto.ArmEstimate,
     except np.linalg.LinAlgError:  # a singular step: the sphere fit stands
         return est
     if not (np.isfinite(r.theta).all() and np.isfinite(r.cov).all()
-            and np.abs(r.theta - theta0).max() < REFINE_MAX_MOVE_M):
+            and np.abs(r.theta - theta0).max() < REFINE_MAX_MOVE_M
+            and (not free[2] or r.theta[2] >= min(arm_auto.SHOULDER_MIN_Z_M, theta0[2]))):
         return est
     sd = np.where(free, np.sqrt(np.maximum(np.diag(r.cov), 0.0)), 0.0)
     return dataclasses.replace(est, shoulder=r.theta[:3].copy(), upper_arm_m=float(r.theta[3]),
