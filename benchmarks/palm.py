@@ -69,7 +69,7 @@ def filter_fps(session, video, blobs, rig, cam, palm) -> list[tuple[str, float, 
     for label, depth in (("projections only (cordella-ukf-palm)", False),
                          ("projections + depths (defaults)", True)):
         s = PalmUkfSettings(depth_updates=depth)
-        b = _blob_depths(session, blobs, depth)
+        b = _blob_depths(session, blobs, depth, (video.width, video.height))
         area = marker_area(b[palm.frame], palm.pixels)
         n = video.n_frames - palm.frame
         for how, compiled in (("compiled", True), ("numpy reference", False)):
