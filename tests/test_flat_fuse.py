@@ -185,3 +185,49 @@ def test_a_window_without_a_detection_leaves_its_rows_empty(detected, tmp_path, 
     assert tab.loc[empty, "wrist_x"].isna().all()
     assert np.isfinite(tab.loc[~empty, "wrist_x"]).all()
     assert summary["frames"] == int((~empty).sum())
+
+
+def _imu_switched_on_late(detected: Path, tmp_path: Path, late_s: float) -> Path:
+    """A copy of the detected session whose IMU export starts ``late_s`` s into its recording
+    (its clock starts at its first sample, so the declared offset grows by late_s)."""
+    folder = tmp_path / "late-imu"
+    shutil.copytree(detected, folder, ignore=shutil.ignore_patterns("armtrack"))
+    lines = (folder / "imu.txt").read_text().splitlines(keepends=True)
+    rows = [k for k, line in enumerate(lines) if line[:1].isdigit()]
+    t0 = int(lines[rows[0]].split("\t")[1])  # SampleTimeFine, 10 kHz ticks
+    keep = [line for k, line in enumerate(lines)
+            if not line[:1].isdigit() or int(line.split("\t")[1]) - t0 >= late_s * 1e4]
+    (folder / "imu.txt").write_text("".join(keep))
+    toml = (folder / "session.toml").read_text()
+    assert "imu_offset_s = -1\n" in toml
+    (folder / "session.toml").write_text(
+        toml.replace("imu_offset_s = -1\n", f"imu_offset_s = {late_s - 1:g}\n"))
+    return folder
+
+
+@pytest.mark.filterwarnings("ignore:.*clock offset")  # the first span: a few s of detections
+def test_an_imu_switched_on_after_the_first_span_still_fuses(detected, tmp_path, monkeypatch):
+    # the IMU's recording starts at 11 s on the session clock: the offset's first span (one
+    # window and its margins, 6 s here) from the video's first detection (0 s) held none of
+    # its samples and fuse refused "no detection falls inside the IMU recording"; the whole
+    # session's path fuses it from its first detection inside the IMU's span (11 s)
+    session = _imu_switched_on_late(detected, tmp_path, 12.0)
+    whole_out = _work(detected, tmp_path, "late-whole")
+    monkeypatch.setattr(fuse_stage, "_longer_than_a_window", lambda s: False)
+    whole = pipeline.fuse(session, out=whole_out)
+    monkeypatch.undo()
+    short = (3.0, 1.5)  # frames 11-20 s: three windows
+    monkeypatch.setattr(windows_mod.windows, "__defaults__", short)
+    for mod in (windows_mod, fuse_span):
+        monkeypatch.setattr(mod, "WINDOW_S", short[0])
+        monkeypatch.setattr(mod, "MARGIN_S", short[1])
+    win_out = _work(detected, tmp_path, "late-win")
+    win = pipeline.fuse(session, out=win_out)
+    assert win["windows"]["count"] == 3
+    assert win["frames"] == whole["frames"]
+    a = pd.read_csv(whole_out / "trajectory-arm-smoother.csv")
+    b = pd.read_csv(win_out / "trajectory-arm-smoother.csv")
+    assert np.array_equal(a["t"], b["t"])
+    assert np.isfinite(a["wrist_x"]).tolist() == np.isfinite(b["wrist_x"]).tolist()
+    assert a.loc[a["t"] < 10.9, "wrist_x"].isna().all()  # before the IMU: empty in both
+    assert np.nanmax(np.abs(a["wrist_x"] - b["wrist_x"])) < POS_TOL_M

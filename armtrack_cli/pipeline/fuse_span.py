@@ -76,17 +76,20 @@ def session_frames(src: Sources, offset: float) -> slice:
 
 def first_offset(session, src: Sources, arm, *, beside: bool) -> tuple[float, object]:
     """The IMU's offset (pipeline/imu_offset.py) on the first window's span alone: the frames
-    within WINDOW_S + 2 MARGIN_S of the video's first detection, the IMU's samples there and
-    AUTO_SEARCH_S + PAD_S either side: its cost and memory as a one-window session's."""
-    det = np.flatnonzero(src.det)
+    within WINDOW_S + 2 MARGIN_S of the first detection the IMU can reach (its span at the
+    declared offset, or at 0 for "auto", and AUTO_SEARCH_S + PAD_S either side: an IMU
+    switched on minutes after the camera), the IMU's samples there and AUTO_SEARCH_S + PAD_S
+    either side: its cost and memory as a one-window session's."""
+    declared = session.sync.imu_offset_s != "auto"
+    c = float(session.sync.imu_offset_s) if declared else 0.0
+    pad = AUTO_SEARCH_S + PAD_S
+    reach = (src.t_f >= src.imu.t_first + c - pad) & (src.t_f <= src.imu.t_last + c + pad)
+    det = np.flatnonzero(src.det & reach)
     if det.size == 0:
         raise DataError(src.dest / "detections.csv", "no detection falls inside the IMU "
                         "recording", "check [sync] imu_offset_s and that the patch was found")
     lo = src.t_f[det[0]]
     span = Window(-np.inf, np.inf, lo, lo + WINDOW_S + 2 * MARGIN_S).read(src.t_f)
-    declared = session.sync.imu_offset_s != "auto"
-    c = float(session.sync.imu_offset_s) if declared else 0.0
-    pad = AUTO_SEARCH_S + PAD_S
     r = src.imu.rows(src.t_f[span.start] - c - pad, src.t_f[span.stop - 1] - c + pad)
     if r.t.size < 3:
         raise DataError(src.dest / "detections.csv", "no detection falls inside the IMU "
