@@ -40,11 +40,27 @@ class _Group(click.Group):
             click.echo("error: interrupted", err=True)
             ctx.exit(130)
         except Exception as exc:  # a bug of ours: still one line, traceback on request
+            if _interrupted(exc):  # Ctrl-C inside a compiled kernel: numba's SystemError
+                click.echo("error: interrupted", err=True)
+                ctx.exit(130)
             if os.environ.get("ARMTRACK_DEBUG"):
                 traceback.print_exc()
             click.echo(f"error: internal error ({type(exc).__name__}: {exc}); rerun with "
                        "ARMTRACK_DEBUG=1 for the traceback and please report it", err=True)
             ctx.exit(1)
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """Whether ``exc`` was caused by a Ctrl-C: numba turns a KeyboardInterrupt raised while a
+    compiled function runs into ``SystemError: CPUDispatcher(…) returned a result with an
+    exception set``, the interrupt its cause."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
