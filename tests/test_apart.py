@@ -104,3 +104,45 @@ def test_run_frees_memory_after_the_steps_it_ran_itself(tmp_path, monkeypatch):
                   force=True)
     assert seen == ["calibrate", "release", "detect", "fuse", "release", "compare", "release"]
     assert out["stages"]["detect"] == "ran"
+
+
+def _slow_write(path) -> None:
+    """atomic_write's writer for the test below: half a file, then a long wait."""
+    import time
+
+    path.write_text("half written")
+    time.sleep(30)
+
+
+@pytest.mark.parametrize("child_too", [True, False], ids=["terminal", "caller-only"])
+def test_ctrl_c_while_the_child_writes_leaves_nothing(tmp_path, capfd, child_too):
+    """`armtrack run` interrupted while detect writes in its child: the child's staged file
+    (.detections.XXXX.csv) was left in the work folder, the child killed before its own
+    interrupt removed it. At a terminal the Ctrl-C reaches both (``terminal``); a signal to
+    the caller alone (``caller-only``) is passed on to the child."""
+    import signal
+    import threading
+    import time
+
+    from armtrack_cli.pipeline.apart import Apart
+
+    child = Apart("armtrack_cli.session.outputs", "atomic_write", (tmp_path / "out.csv",
+                                                                   _slow_write))
+    deadline = time.monotonic() + 30
+    while not list(tmp_path.iterdir()) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert [p.name[:5] for p in tmp_path.iterdir()] == [".out."]  # the child is writing
+
+    def ctrl_c() -> None:  # while this process waits in result()
+        if child_too:
+            child._proc.send_signal(signal.SIGINT)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(0.3, ctrl_c)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        child.result()
+    timer.join()
+    assert child._proc.returncode == 130
+    assert list(tmp_path.iterdir()) == []
+    assert "Traceback" not in capfd.readouterr().err

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import signal
 import subprocess
 import sys
 from typing import Any
@@ -21,6 +22,7 @@ from typing import Any
 from armtrack_cli.session.proc_status import status_mb
 
 _CHILD = "from armtrack_cli.pipeline.apart import child; child()"
+STOP_GRACE_S = 1.0  # s an interrupted caller waits for its child to end by itself
 _TOGETHER = [0.0]  # MB, the highest of together_mb's sums so far in this process
 
 
@@ -63,8 +65,7 @@ class Apart:
             answer = self._proc.stdout.read()
             code = self._proc.wait()
         except BaseException:  # Ctrl-C while waiting: the child does not outlive us
-            self._proc.kill()
-            self._proc.wait()
+            self._stop()
             raise
         finally:
             self._proc.stdout.close()
@@ -78,6 +79,26 @@ class Apart:
             return value
         raise value
 
+    def _stop(self) -> None:
+        """The child ended after this process was interrupted, its staged outputs removed as
+        its own interrupt removes them (session/outputs.py): a Ctrl-C at a terminal reaches
+        it too, and it ends within STOP_GRACE_S; else it is sent one; killed only if it
+        does not end after that (a kill leaves its staged files behind)."""
+        p = self._proc
+        try:
+            for sig, grace in ((None, STOP_GRACE_S), (signal.SIGINT, 10 * STOP_GRACE_S)):
+                if sig is not None:
+                    p.send_signal(sig)
+                try:
+                    p.wait(grace)
+                    return
+                except subprocess.TimeoutExpired:
+                    pass
+        finally:  # a second Ctrl-C meanwhile, or a child that will not end
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+
 
 def child() -> None:
     """The child's side: the call from stdin; its answer (True, value) or (False, exception)
@@ -89,9 +110,12 @@ def child() -> None:
     answer = os.dup(1)
     os.dup2(2, 1)  # the stage's prints (Python's and C libraries') to stderr
     sys.stdout = sys.stderr
-    module, name, args, kwargs = pickle.loads(sys.stdin.buffer.read())
     try:
+        module, name, args, kwargs = pickle.loads(sys.stdin.buffer.read())
         out = (True, getattr(importlib.import_module(module), name)(*args, **kwargs))
+    except KeyboardInterrupt:  # the caller was interrupted too, and says so: no traceback
+        sys.stderr.flush()
+        os._exit(130)
     except BaseException as exc:  # handed back whole, raised there
         if not isinstance(exc, Exception):
             raise
