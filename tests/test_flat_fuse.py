@@ -231,3 +231,28 @@ def test_an_imu_switched_on_after_the_first_span_still_fuses(detected, tmp_path,
     assert np.isfinite(a["wrist_x"]).tolist() == np.isfinite(b["wrist_x"]).tolist()
     assert a.loc[a["t"] < 10.9, "wrist_x"].isna().all()  # before the IMU: empty in both
     assert np.nanmax(np.abs(a["wrist_x"] - b["wrist_x"])) < POS_TOL_M
+
+
+def test_a_false_detection_where_a_window_starts_is_gated_as_whole(detected, tmp_path,
+                                                                   monkeypatch):
+    # one false detection (the bottom-right corner: its ray passes ~50 cm outside the arm's
+    # reach) at 3.0 s, the first frame window 2 reads (inner 6-12 s, margins 3 s): window 2
+    # was initialised from it and _initial_state refused the whole session ("[arm] cannot
+    # explain the first detection"); a whole-session run gates it and fuses every frame
+    whole_out = _work(detected, tmp_path, "false-whole")
+    det = pd.read_csv(whole_out / "detections.csv")
+    k = int(np.flatnonzero(np.isclose(det["t"], 3.0, atol=1e-4))[0])
+    det.loc[k, ["u", "v"]] = [630.0, 470.0]
+    det.to_csv(whole_out / "detections.csv", index=False, float_format="%.6f")
+    win_out = _work(detected, tmp_path, "false-win")
+    shutil.copy(whole_out / "detections.csv", win_out / "detections.csv")
+    whole = pipeline.fuse(detected, out=whole_out)
+    assert whole["detections_gated"] >= 1  # the whole run: gated
+    _short_windows(monkeypatch)
+    win = pipeline.fuse(detected, out=win_out)
+    assert win["windows"]["count"] == 3 and win["frames"] == whole["frames"]
+    a = pd.read_csv(whole_out / "trajectory-arm-smoother.csv")
+    b = pd.read_csv(win_out / "trajectory-arm-smoother.csv")
+    for c in ("wrist_x", "wrist_y", "wrist_z"):
+        assert np.isfinite(b[c]).all()
+        assert np.max(np.abs(a[c] - b[c])) < POS_TOL_M, c

@@ -12,6 +12,7 @@ import numpy as np
 
 from armtrack_cli.core import quaternion as quat
 from armtrack_cli.core.errors import DataError
+from armtrack_cli.core.limits import REACH_MARGIN_M
 from armtrack_cli.core.windows import MARGIN_S, WINDOW_S, Window, windows
 from armtrack_cli.fuse import models
 from armtrack_cli.fuse.arm_smoother import ImuSamples
@@ -61,6 +62,26 @@ def span_inputs(src: Sources, offset: float, frames: np.ndarray, s) -> tuple | N
     uv = src.uv_rows(int(frames[0]), int(frames[-1]) + 1)
     return frames, Inputs(steps, uv, quat.interpolate(t, r.quat, t_fr), t=t_fr,
                           imu=ImuSamples(t, r.quat, r.acc, r.gyr), release_imu=True)
+
+
+def explained_from(src: Sources, offset: float, frames: np.ndarray, arm) -> np.ndarray:
+    """``frames`` from the first detection among them whose camera ray the arm can reach
+    (models.ray_misses_arm within REACH_MARGIN_M, at the IMU's orientation there), for a
+    window after the first: a whole session's run meets a false detection there mid-stream
+    and gates it (fuse/robust.py), while a window that started from it would be refused
+    whole by _initial_state's check, the session with it. Empty when none is; ``frames``
+    as they are without an arm."""
+    if arm is None:
+        return frames
+    for j in np.flatnonzero(src.det[frames]):
+        k = int(frames[j])
+        t = float(src.t_f[k])
+        r = src.imu.rows(t - PAD_S - offset, t + PAD_S - offset)
+        q = quat.interpolate(r.t + offset, r.quat, np.array([t]))[0] if r.t.size else None
+        if q is None or not np.isfinite(q).all() or models.ray_misses_arm(
+                src.projection, src.uv_rows(k, k + 1)[0], arm, q) <= REACH_MARGIN_M:
+            return frames[j:]  # (no IMU there: span_inputs and _initial_state say so)
+    return frames[:0]
 
 
 def session_frames(src: Sources, offset: float) -> slice:

@@ -207,8 +207,10 @@ class _Run:
         """Window i's inner rows (the trajectory table's) and the IMU orientation at them."""
         t_f = self.src.t_f
         rows = np.flatnonzero(w.inner(t_f))
-        got = fuse_span.span_inputs(self.src, self.offset,
-                                    fuse_span.window_frames(self.src, self.frames, w), self.s)
+        frames = fuse_span.window_frames(self.src, self.frames, w)
+        if i > 0:  # from a detection the arm can explain (the first window: the session's)
+            frames = fuse_span.explained_from(self.src, self.offset, frames, self.arm)
+        got = fuse_span.span_inputs(self.src, self.offset, frames, self.s)
         if got is None:  # no detection in the window: its rows empty (nothing to start from)
             return self._empty(rows)
         fr, inp = got
