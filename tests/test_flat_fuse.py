@@ -181,7 +181,8 @@ def test_a_window_without_a_detection_leaves_its_rows_empty(detected, tmp_path, 
     det.to_csv(out / "detections.csv", index=False, float_format="%.6f")
     summary = pipeline.fuse(detected, out=out)
     tab = pd.read_csv(out / "trajectory-arm-smoother.csv")
-    empty = (tab["t"] >= 6.0) & (tab["t"] < 16.0)  # window 2's rows, window 3's before 16 s
+    # window 2's rows and window 3's before 16 s, but those window 1 ran over (to 9 s)
+    empty = (tab["t"] > 9.0 + 1e-6) & (tab["t"] < 16.0)
     assert tab.loc[empty, "wrist_x"].isna().all()
     assert np.isfinite(tab.loc[~empty, "wrist_x"]).all()
     assert summary["frames"] == int((~empty).sum())
@@ -256,3 +257,30 @@ def test_a_false_detection_where_a_window_starts_is_gated_as_whole(detected, tmp
     for c in ("wrist_x", "wrist_y", "wrist_z"):
         assert np.isfinite(b[c]).all()
         assert np.max(np.abs(a[c] - b[c])) < POS_TOL_M, c
+
+
+def test_a_patch_lost_across_a_seam_is_predicted_through_as_whole(detected, tmp_path,
+                                                                 monkeypatch):
+    # no detection from 2.0 to 7.0 s: window 2 (inner 6-12 s, read from 3 s) starts at 7 s.
+    # Its rows 6-7 s were left empty, though window 1 ran over them (to 9 s) as the whole
+    # run does; a 1 s hole, longer than the measures bridge (0.5 s), made every path measure
+    # of the session "not computable" where the whole run gives them all
+    whole_out = _work(detected, tmp_path, "seam-whole")
+    det = pd.read_csv(whole_out / "detections.csv")
+    det.loc[(det["t"] >= 2.0) & (det["t"] < 7.0), "ok"] = 0
+    det.to_csv(whole_out / "detections.csv", index=False, float_format="%.6f")
+    win_out = _work(detected, tmp_path, "seam-win")
+    shutil.copy(whole_out / "detections.csv", win_out / "detections.csv")
+    whole = pipeline.fuse(detected, out=whole_out)
+    _short_windows(monkeypatch)
+    win = pipeline.fuse(detected, out=win_out)
+    assert win["frames"] == whole["frames"]
+    a = pd.read_csv(whole_out / "trajectory-arm-smoother.csv")
+    b = pd.read_csv(win_out / "trajectory-arm-smoother.csv")
+    for c in ("wrist_x", "wrist_y", "wrist_z", "elbow_x", "elbow_y", "elbow_z"):
+        assert np.isfinite(b[c]).all(), c
+        assert np.max(np.abs(a[c] - b[c])) < POS_TOL_M, c  # measured 3.7 mm
+    ka = pd.read_csv(whole_out / "kinematics-arm-smoother.csv")
+    kb = pd.read_csv(win_out / "kinematics-arm-smoother.csv")
+    assert len(kb) == len(ka)
+    assert not kb["value"].astype(str).str.contains("gap in the wrist").any()

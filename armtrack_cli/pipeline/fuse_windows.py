@@ -122,6 +122,7 @@ class _Run:
         self.far = self.rows = self.kept = self.n = self.used = 0
         self.elapsed = self.cpu = 0.0
         self.x0 = self.how = self.offset_info = None
+        self.tail: tuple | None = None  # the last window's frames past its inner span
         self.name = f"trajectory-{s.method}.csv"
 
     def write(self, where: str, auto) -> dict[str, Any]:
@@ -204,49 +205,100 @@ class _Run:
         return far
 
     def _window(self, i: int, w: Window) -> tuple[dict, np.ndarray]:
-        """Window i's inner rows (the trajectory table's) and the IMU orientation at them."""
+        """Window i's inner rows (the trajectory table's) and the IMU orientation at them:
+        its own estimates from its first detection on, the rows before it (where it starts
+        past its inner span's start) the previous window's, as far as that one ran."""
+        tail, self.tail = self.tail, None
+        own = self._own(i, w)
+        rows = np.flatnonzero(w.inner(self.src.t_f))
+        first = own[0][0] if own is not None else np.inf  # own: (frames, est, q, z)
+        if tail is not None:
+            tail = _cut(tail, tail[0] < first)
+        if tail is not None and tail[0].size:
+            _finite_rows(self, *tail)
+            self.n += tail[0].size
+            self.used += int(np.isfinite(tail[3]).all(axis=1).sum())
+            own = tail if own is None else tuple(
+                _joined(x, y) if isinstance(x, Estimates) else np.concatenate([x, y])
+                for x, y in zip(tail, own))
+        if own is None:  # nothing estimated here: its rows empty (nothing to start from)
+            return self._empty(rows)
+        fr, est, q, _ = own
+        local = fr - rows[0]
+        table = trajectory_table(self.src.t_f[rows], local, est, _Orientations(q), self.arm)
+        q_WB = np.full((rows.size, 4), np.nan)
+        q_WB[local] = q if est.q_WB is None else est.q_WB
+        return table, q_WB
+
+    def _own(self, i: int, w: Window) -> tuple | None:
+        """Window i's own estimates of its inner frames (frames, Estimates, IMU orientation,
+        detections), its frames past the inner span kept in self.tail for the next window;
+        None when it has none (no detection among its frames, or in its margins alone)."""
         t_f = self.src.t_f
-        rows = np.flatnonzero(w.inner(t_f))
         frames = fuse_span.window_frames(self.src, self.frames, w)
         if i > 0:  # from a detection the arm can explain (the first window: the session's)
             frames = fuse_span.explained_from(self.src, self.offset, frames, self.arm)
         got = fuse_span.span_inputs(self.src, self.offset, frames, self.s)
-        if got is None:  # no detection in the window: its rows empty (nothing to start from)
-            return self._empty(rows)
+        if got is None:  # no detection in the window
+            return None
         fr, inp = got
         p = Prepared(t_f, fr, inp, self.src.projection, self.arm,
                      self.check if i == 0 else Done(self.offset_info), None,
                      self.src.imu.orientation_source, self.offset)
         x0, P0, how = _initial_state(self.session, p, self.s)
         keep = np.flatnonzero(w.inner(t_f[fr]))
-        if keep.size == 0:  # its detections all in its margins: its rows empty
-            return self._empty(rows)
+        if keep.size == 0:  # its detections all in its margins
+            return None
         a, b = int(keep[0]), int(keep[-1]) + 1
         est, elapsed, cpu, info = _timed_run(self.s, p, x0, P0, summary_rows=slice(a, b))
         if i == 0:
             self.x0, self.how, self.offset_info = x0, how, info
         self.elapsed, self.cpu = self.elapsed + elapsed, self.cpu + cpu
+        if b < fr.size:  # its frames past the inner span: the next window's until it starts
+            self.tail = fr[b:], _rows(est, slice(b, None)), inp.q_WB[b:], inp.z[b:]
         est, q = _rows(est, slice(a, b)), inp.q_WB[a:b]
-        bad = ~np.isfinite(est.mean).all(axis=1)
-        if bad.any():
-            t_bad = t_f[fr[a + int(np.flatnonzero(bad)[0])]]
-            raise checks.diverged(self.src.dest / self.name, self.s.method, t_bad, self.arm)
+        _finite_rows(self, fr[a:b], est, q, inp.z[a:b])
         self.parts.append(({**detection_counts(est.codes), **(est.summary or {})}, b - a))
         self.n += b - a
         self.used += int(np.isfinite(inp.z[a:b]).all(axis=1).sum())
-        local = fr[a:b] - rows[0]
-        table = trajectory_table(t_f[rows], local, est, dataclasses.replace(inp, q_WB=q),
-                                 self.arm)
-        q_WB = np.full((rows.size, 4), np.nan)
-        q_WB[local] = q if est.q_WB is None else est.q_WB
-        return table, q_WB
-
+        return fr[a:b], est, q, inp.z[a:b]
 
     def _empty(self, rows: np.ndarray) -> tuple[dict, np.ndarray]:
         """Rows no estimate reaches: their times, every other column empty."""
         empty = Estimates(np.empty((0, 6)), np.empty((0, 6, 6)), None)
         return (trajectory_table(self.src.t_f[rows], np.empty(0, int), empty, _NoInputs,
                                  self.arm), np.full((rows.size, 4), np.nan))
+
+
+def _finite_rows(run: _Run, fr: np.ndarray, est: Estimates, q: np.ndarray, z: np.ndarray
+                 ) -> tuple:
+    """(fr, est, q, z) once every estimate is finite; else fuse's refusal (fuse_checks.
+    diverged) from the first frame that is not."""
+    bad = ~np.isfinite(est.mean).all(axis=1)
+    if bad.any():
+        t_bad = run.src.t_f[fr[int(np.flatnonzero(bad)[0])]]
+        raise checks.diverged(run.src.dest / run.name, run.s.method, t_bad, run.arm)
+    return fr, est, q, z
+
+
+def _cut(part: tuple, keep: np.ndarray) -> tuple:
+    """The rows ``keep`` (a mask) of (frames, Estimates, q, z)."""
+    return tuple(_rows(x, keep) if isinstance(x, Estimates) else x[keep] for x in part)
+
+
+def _joined(a: Estimates, b: Estimates) -> Estimates:
+    """Two runs' estimates of consecutive frames as one (what trajectory_table reads)."""
+    cat = lambda x, y: None if x is None or y is None else np.concatenate([x, y])  # noqa: E731
+    return Estimates(np.concatenate([a.mean, b.mean]), None, cat(a.ess, b.ess), None,
+                     cat(a.q_WB, b.q_WB), cat(a.elbow_var, b.elbow_var), None,
+                     np.concatenate([a.sd, b.sd]) ** 2)
+
+
+class _Orientations:
+    """trajectory_table's inputs: the IMU's orientation at its rows alone."""
+
+    def __init__(self, q_WB: np.ndarray) -> None:
+        self.q_WB = q_WB
 
 
 class _NoInputs:
