@@ -22,7 +22,7 @@ from armtrack_cli.pipeline import fuse_span, fuse_windows
 from armtrack_cli.pipeline.fuse_imu import ArrayImu, SpilledImu, chunks_of
 from armtrack_cli.pipeline.fuse_summary import combined
 
-from .conftest import detected_sample
+from .conftest import REPO, detected_sample
 
 fuse_stage = importlib.import_module("armtrack_cli.pipeline.fuse")
 SHORT = (6.0, 3.0)  # inner span and margin, s: circle-01 (20 s) becomes three windows
@@ -188,17 +188,22 @@ def test_a_window_without_a_detection_leaves_its_rows_empty(detected, tmp_path, 
     assert summary["frames"] == int((~empty).sum())
 
 
+def _imu_cut(detected: Path, folder: Path, lo_s: float, hi_s: float) -> Path:
+    """A copy of the detected session without the IMU's samples from lo_s to hi_s s of its
+    recording (its own clock, from its first sample)."""
+    shutil.copytree(detected, folder, ignore=shutil.ignore_patterns("armtrack"))
+    lines = (folder / "imu.txt").read_text().splitlines(keepends=True)
+    t0 = int(next(line for line in lines if line[:1].isdigit()).split("\t")[1])  # 10 kHz
+    keep = [line for line in lines if not line[:1].isdigit()
+            or not lo_s * 1e4 <= int(line.split("\t")[1]) - t0 < hi_s * 1e4]
+    (folder / "imu.txt").write_text("".join(keep))
+    return folder
+
+
 def _imu_switched_on_late(detected: Path, tmp_path: Path, late_s: float) -> Path:
     """A copy of the detected session whose IMU export starts ``late_s`` s into its recording
     (its clock starts at its first sample, so the declared offset grows by late_s)."""
-    folder = tmp_path / "late-imu"
-    shutil.copytree(detected, folder, ignore=shutil.ignore_patterns("armtrack"))
-    lines = (folder / "imu.txt").read_text().splitlines(keepends=True)
-    rows = [k for k, line in enumerate(lines) if line[:1].isdigit()]
-    t0 = int(lines[rows[0]].split("\t")[1])  # SampleTimeFine, 10 kHz ticks
-    keep = [line for k, line in enumerate(lines)
-            if not line[:1].isdigit() or int(line.split("\t")[1]) - t0 >= late_s * 1e4]
-    (folder / "imu.txt").write_text("".join(keep))
+    folder = _imu_cut(detected, tmp_path / "late-imu", 0.0, late_s)
     toml = (folder / "session.toml").read_text()
     assert "imu_offset_s = -1\n" in toml
     (folder / "session.toml").write_text(
@@ -284,3 +289,30 @@ def test_a_patch_lost_across_a_seam_is_predicted_through_as_whole(detected, tmp_
     kb = pd.read_csv(win_out / "kinematics-arm-smoother.csv")
     assert len(kb) == len(ka)
     assert not kb["value"].astype(str).str.contains("gap in the wrist").any()
+
+
+def test_an_imu_gap_where_a_window_starts_is_held_over_as_whole(detected, tmp_path,
+                                                                monkeypatch):
+    # the IMU silent from 1.5 to 3.5 s on the session clock (2.5-4.5 s of its own): window 2
+    # reads from 3.0 s, its IMU from 2.0 s, both in the gap. Its samples started after its
+    # first frames, whose orientation was NaN: fuse failed with an internal error ("min()
+    # arg is an empty sequence" in the initial state). The whole run holds the samples
+    # either side of the gap over it; the window now reads them too
+    session = _imu_cut(detected, tmp_path / "imu-gap", 2.5, 4.5)
+    whole_out = _work(detected, tmp_path, "gap-whole")
+    monkeypatch.setattr(fuse_stage, "_longer_than_a_window", lambda s: False)
+    whole = pipeline.fuse(session, out=whole_out)
+    monkeypatch.undo()
+    _short_windows(monkeypatch)
+    win_out = _work(detected, tmp_path, "gap-win")
+    win = pipeline.fuse(session, out=win_out)
+    assert win["windows"]["count"] == 3 and win["frames"] == whole["frames"]
+    a = pd.read_csv(whole_out / "trajectory-arm-smoother.csv")
+    b = pd.read_csv(win_out / "trajectory-arm-smoother.csv")
+    assert np.isfinite(a["wrist_x"]).all() and np.isfinite(b["wrist_x"]).all()
+    truth = np.load(REPO / "sample_sessions" / "circle-01.truth.npz")
+    assert np.allclose(truth["frame_t"], b["t"], atol=1e-4)
+    after = b["t"].to_numpy() >= 6.0  # windows 2 and 3's own rows, 2.5 s past the gap
+    err = np.linalg.norm(b[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
+                         - truth["frame_wrist"], axis=1)[after]
+    assert np.sqrt(np.mean(err**2)) < 0.01  # measured 0.26 cm (the whole run 0.68 cm)

@@ -55,13 +55,40 @@ def span_inputs(src: Sources, offset: float, frames: np.ndarray, s) -> tuple | N
         return None
     frames = frames[int(np.flatnonzero(det)[0]):]  # consecutive
     t_fr = src.t_f[frames]
-    r = src.imu.rows(t_fr[0] - max(PAD_S, s.pre_roll_s) - offset, t_fr[-1] + PAD_S - offset)
+    r = held_rows(src.imu, t_fr[0] - max(PAD_S, s.pre_roll_s) - offset,
+                  t_fr[-1] + PAD_S - offset)
     t = r.t + offset  # session time = stream time + offset
     steps = models.composite_steps(t, models.accel_world(r.quat, r.acc), t_fr,
                                    accel_noise=s.accel_noise, imu_period=1.0 / src.imu.rate_hz)
     uv = src.uv_rows(int(frames[0]), int(frames[-1]) + 1)
     return frames, Inputs(steps, uv, quat.interpolate(t, r.quat, t_fr), t=t_fr,
                           imu=ImuSamples(t, r.quat, r.acc, r.gyr), release_imu=True)
+
+
+def held_rows(imu, lo: float, hi: float):
+    """imu.rows(lo, hi) (s, the IMU's clock), with the last sample before lo and the first
+    after hi where a gap in the recording meets that end: the samples a whole-session run
+    holds over the gap (models.composite_steps) and interpolates the orientation across.
+    Without them a window starting in a gap had no orientation at its first frames (NaN:
+    _initial_state failed, "min() arg is an empty sequence") and no acceleration there."""
+    r = imu.rows(lo, hi)
+    near = 1.5 / imu.rate_hz  # a sample this near an end: no gap there
+    a = _beyond(imu, lo, -1) if (not r.t.size or r.t[0] - lo > near) else lo
+    b = _beyond(imu, hi, +1) if (not r.t.size or hi - r.t[-1] > near) else hi
+    return r if (a, b) == (lo, hi) else imu.rows(a, b)
+
+
+def _beyond(imu, x: float, side: int) -> float:
+    """The time of the IMU's nearest usable sample at or before (side -1) or at or after
+    (+1) x, read over spans growing fourfold from PAD_S; x itself when there is none."""
+    if (side < 0 and x <= imu.t_first) or (side > 0 and x >= imu.t_last):
+        return x
+    k = PAD_S
+    while True:
+        r = imu.rows(x - k, x) if side < 0 else imu.rows(x, x + k)
+        if r.t.size:
+            return float(r.t[-1] if side < 0 else r.t[0])
+        k *= 4
 
 
 def explained_from(src: Sources, offset: float, frames: np.ndarray, arm) -> np.ndarray:
