@@ -316,3 +316,24 @@ def test_an_imu_gap_where_a_window_starts_is_held_over_as_whole(detected, tmp_pa
     err = np.linalg.norm(b[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
                          - truth["frame_wrist"], axis=1)[after]
     assert np.sqrt(np.mean(err**2)) < 0.01  # measured 0.26 cm (the whole run 0.68 cm)
+
+
+def test_an_imu_gap_where_a_window_ends_is_held_over_as_whole(detected, tmp_path,
+                                                              monkeypatch):
+    # the IMU silent from 8 to 10 s on the session clock: window 1 (inner 0-6 s) reads frames
+    # to 9 s, its last ones in the gap with no sample after them (on a 460 s session with the
+    # IMU silent 318-325 s, that alone made fuse refuse it: "arm-smoother diverged: its
+    # estimate is not finite from t = 0.000 s"), and window 3 starts in it at 9 s (an
+    # internal error, as in the test above)
+    session = _imu_cut(detected, tmp_path / "imu-gap-end", 9.0, 11.0)
+    _short_windows(monkeypatch)
+    out = _work(detected, tmp_path, "gap-end")
+    win = pipeline.fuse(session, out=out)
+    assert win["windows"]["count"] == 3
+    b = pd.read_csv(out / "trajectory-arm-smoother.csv")
+    assert np.isfinite(b["wrist_x"]).all()
+    truth = np.load(REPO / "sample_sessions" / "circle-01.truth.npz")
+    own = b["t"].to_numpy() < 6.0  # window 1's rows, 2 s before the gap
+    err = np.linalg.norm(b[["wrist_x", "wrist_y", "wrist_z"]].to_numpy()
+                         - truth["frame_wrist"], axis=1)[own]
+    assert np.sqrt(np.mean(err**2)) < 0.01
