@@ -215,7 +215,7 @@ class _Run:
         if tail is not None:
             tail = _cut(tail, tail[0] < first)
         if tail is not None and tail[0].size:
-            _finite_rows(self, *tail)
+            _finite_rows(self, *tail[:2])
             self.n += tail[0].size
             self.used += int(np.isfinite(tail[3]).all(axis=1).sum())
             own = tail if own is None else tuple(
@@ -257,7 +257,7 @@ class _Run:
         if b < fr.size:  # its frames past the inner span: the next window's until it starts
             self.tail = fr[b:], _rows(est, slice(b, None)), inp.q_WB[b:], inp.z[b:]
         est, q = _rows(est, slice(a, b)), inp.q_WB[a:b]
-        _finite_rows(self, fr[a:b], est, q, inp.z[a:b])
+        _finite_rows(self, fr[a:b], est)
         self.parts.append(({**detection_counts(est.codes), **(est.summary or {})}, b - a))
         self.n += b - a
         self.used += int(np.isfinite(inp.z[a:b]).all(axis=1).sum())
@@ -270,15 +270,13 @@ class _Run:
                                  self.arm), np.full((rows.size, 4), np.nan))
 
 
-def _finite_rows(run: _Run, fr: np.ndarray, est: Estimates, q: np.ndarray, z: np.ndarray
-                 ) -> tuple:
-    """(fr, est, q, z) once every estimate is finite; else fuse's refusal (fuse_checks.
-    diverged) from the first frame that is not."""
+def _finite_rows(run: _Run, fr: np.ndarray, est: Estimates) -> None:
+    """Nothing when every estimate of frames ``fr`` is finite; else fuse's refusal
+    (fuse_checks.diverged) from the first frame that is not."""
     bad = ~np.isfinite(est.mean).all(axis=1)
     if bad.any():
         t_bad = run.src.t_f[fr[int(np.flatnonzero(bad)[0])]]
         raise checks.diverged(run.src.dest / run.name, run.s.method, t_bad, run.arm)
-    return fr, est, q, z
 
 
 def _cut(part: tuple, keep: np.ndarray) -> tuple:
